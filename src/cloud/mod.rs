@@ -1,0 +1,131 @@
+//! Point clouds: the environment P of the paper (section 3.1), and the readers that load it.
+//!
+//! Every cloud handed to the detector is in metres, z up, with the floor at z = 0.
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::Point3;
+
+mod pcd;
+mod ply;
+mod xyz;
+
+pub use pcd::read_pcd;
+pub use ply::{read_ply, write_ply_points};
+pub use xyz::read_xyz;
+
+/// A point cloud in metres, z up (the environment P, section 3.1).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PointCloud {
+    /// The points, in metres, in the world frame (z up, floor at z = 0).
+    pub points: Vec<Point3<f64>>,
+}
+
+/// A cloud as read from a file, with what the reader had to drop.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LoadedCloud {
+    /// The finite points of the file.
+    pub cloud: PointCloud,
+    /// How many points had a NaN or infinite coordinate and were dropped.
+    pub dropped_non_finite: usize,
+}
+
+/// What went wrong reading a cloud file. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum CloudError {
+    /// The file could not be opened or read.
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The header is malformed; `at` says where (line or byte).
+    #[error("{path}: bad header at {at}: {what}")]
+    Header {
+        /// The file.
+        path: PathBuf,
+        /// Where: "line N" or "byte N".
+        at: String,
+        /// What is wrong.
+        what: String,
+    },
+    /// The body does not match the header; `at` says where (line or byte).
+    #[error("{path}: bad data at {at}: {what}")]
+    Body {
+        /// The file.
+        path: PathBuf,
+        /// Where: "line N", "byte N" or "point N".
+        at: String,
+        /// What is wrong.
+        what: String,
+    },
+    /// The file's extension names no format this tool reads.
+    #[error("{path}: unknown point cloud format (expected .ply, .pcd, .xyz, .txt or .csv)")]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+/// Reads a point cloud file, choosing the reader by extension (`.ply`, `.pcd`, `.xyz`/`.txt`/`.csv`).
+///
+/// Points with a non-finite coordinate are dropped and counted in [`LoadedCloud::dropped_non_finite`].
+pub fn load(path: &Path) -> Result<LoadedCloud, CloudError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    let raw = match ext.as_str() {
+        "ply" => read_ply(path)?,
+        "pcd" => read_pcd(path)?,
+        "xyz" | "txt" | "csv" => read_xyz(path)?,
+        _ => {
+            return Err(CloudError::UnknownFormat {
+                path: path.to_path_buf(),
+            })
+        }
+    };
+    Ok(keep_finite(raw))
+}
+
+/// Splits raw points into the finite ones and a count of the rest.
+pub fn keep_finite(raw: Vec<Point3<f64>>) -> LoadedCloud {
+    let total = raw.len();
+    let points: Vec<Point3<f64>> = raw
+        .into_iter()
+        .filter(|p| p.coords.iter().all(|c| c.is_finite()))
+        .collect();
+    LoadedCloud {
+        dropped_non_finite: total - points.len(),
+        cloud: PointCloud { points },
+    }
+}
+
+impl PointCloud {
+    /// Builds a cloud from points in metres (world frame).
+    pub fn new(points: Vec<Point3<f64>>) -> Self {
+        Self { points }
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Whether the cloud has no point.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Axis-aligned bounds `(min, max)` in metres, or `None` for an empty cloud.
+    pub fn bounds(&self) -> Option<(Point3<f64>, Point3<f64>)> {
+        let first = *self.points.first()?;
+        Some(self.points.iter().fold((first, first), |(lo, hi), p| {
+            (lo.inf(p), hi.sup(p))
+        }))
+    }
+}

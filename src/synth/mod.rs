@@ -1,0 +1,1 @@
+//! Procedural furniture and scenes with known affordances, for tests and labelled data.
