@@ -4,6 +4,21 @@
 //! body is dropped into the scene at promising positions and its joints are unfolded
 //! until they touch the scene; which joints touch, and where, tells the fine-grained
 //! affordance (sitting with or without backrest, armrest, headrest; lying).
+//!
+//! Stages, each a function from one typed value to the next:
+//! [`cloud::load`] → [`heightmap::HeightMap`] → [`hypotheses::hypotheses`] →
+//! [`scene::Scene`] → [`fit::fit`] → [`unfold::unfold`] → [`select`] → [`report`].
 
+pub mod agent;
 pub mod cloud;
+pub mod detect;
+pub mod fit;
+pub mod fuzzy;
+pub mod heightmap;
+pub mod hierarchy;
+pub mod hypotheses;
+pub mod model;
+pub mod scene;
+pub mod select;
 pub mod synth;
+pub mod unfold;

@@ -1,1 +1,1157 @@
-//! placeholder
+//! PLY reader and writer (Stanford polygon format): vertices only, faces ignored.
+//!
+//! The reader is our own, streaming, and checks every size before allocating; it handles
+//! `ascii`, `binary_little_endian` and `binary_big_endian`, vertex coordinates of any scalar
+//! type, extra vertex properties in any order, and other elements (faces, ...) before or
+//! after the vertices, including list properties.
+
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+use nalgebra::Point3;
+
+use super::CloudError;
+
+/// Longest header line accepted, in bytes (longer means the file is not a PLY header).
+pub(super) const MAX_HEADER_LINE: usize = 64 * 1024;
+/// Most header lines accepted before `end_header`.
+const MAX_HEADER_LINES: usize = 100_000;
+/// Most points reserved up front; the vector grows beyond this only as data is really read.
+pub(super) const MAX_PREALLOC: usize = 1 << 20;
+
+/// One line read by [`read_line_capped`].
+pub(super) enum Line {
+    /// End of file, nothing read.
+    Eof,
+    /// A line (without its `\n`, and without a trailing `\r`), and the bytes it took in the file.
+    Text(Vec<u8>, usize),
+    /// The line is longer than the cap.
+    TooLong,
+}
+
+/// Reads one `\n`-terminated line of at most `cap` bytes; never allocates more than `cap + 1`.
+pub(super) fn read_line_capped<R: BufRead>(r: &mut R, cap: usize) -> io::Result<Line> {
+    let mut buf = Vec::new();
+    let n = r
+        .by_ref()
+        .take(cap as u64 + 1)
+        .read_until(b'\n', &mut buf)?;
+    if n == 0 {
+        return Ok(Line::Eof);
+    }
+    if buf.last() == Some(&b'\n') {
+        buf.pop();
+    } else if n > cap {
+        return Ok(Line::TooLong);
+    }
+    if buf.last() == Some(&b'\r') {
+        buf.pop();
+    }
+    Ok(Line::Text(buf, n))
+}
+
+/// Builds a [`CloudError::Header`].
+pub(super) fn header_err(
+    path: &Path,
+    at: impl Into<String>,
+    what: impl Into<String>,
+) -> CloudError {
+    CloudError::Header {
+        path: path.to_path_buf(),
+        at: at.into(),
+        what: what.into(),
+    }
+}
+
+/// Builds a [`CloudError::Body`].
+pub(super) fn body_err(path: &Path, at: impl Into<String>, what: impl Into<String>) -> CloudError {
+    CloudError::Body {
+        path: path.to_path_buf(),
+        at: at.into(),
+        what: what.into(),
+    }
+}
+
+/// Builds a [`CloudError::Io`].
+pub(super) fn io_err(path: &Path, source: io::Error) -> CloudError {
+    CloudError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// A PLY scalar type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(s: &str) -> Option<Scalar> {
+        Some(match s {
+            "char" | "int8" => Scalar::I8,
+            "uchar" | "uint8" => Scalar::U8,
+            "short" | "int16" => Scalar::I16,
+            "ushort" | "uint16" => Scalar::U16,
+            "int" | "int32" => Scalar::I32,
+            "uint" | "uint32" => Scalar::U32,
+            "float" | "float32" => Scalar::F32,
+            "double" | "float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+
+    fn is_int(self) -> bool {
+        !matches!(self, Scalar::F32 | Scalar::F64)
+    }
+
+    /// Decodes `b` (exactly `self.size()` bytes) as a number.
+    fn decode(self, b: &[u8], big: bool) -> f64 {
+        macro_rules! num {
+            ($t:ty, $n:expr) => {{
+                let mut a = [0u8; $n];
+                a.copy_from_slice(&b[..$n]);
+                if big {
+                    <$t>::from_be_bytes(a)
+                } else {
+                    <$t>::from_le_bytes(a)
+                }
+            }};
+        }
+        match self {
+            Scalar::I8 => f64::from(b[0] as i8),
+            Scalar::U8 => f64::from(b[0]),
+            Scalar::I16 => f64::from(num!(i16, 2)),
+            Scalar::U16 => f64::from(num!(u16, 2)),
+            Scalar::I32 => f64::from(num!(i32, 4)),
+            Scalar::U32 => f64::from(num!(u32, 4)),
+            Scalar::F32 => f64::from(num!(f32, 4)),
+            Scalar::F64 => num!(f64, 8),
+        }
+    }
+}
+
+/// A property of an element: a scalar, or a list (count type, item type).
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Kind {
+    Scalar(Scalar),
+    List(Scalar, Scalar),
+}
+
+#[derive(Debug, Clone)]
+struct Prop {
+    name: String,
+    kind: Kind,
+}
+
+#[derive(Debug, Clone)]
+struct Element {
+    name: String,
+    count: u64,
+    props: Vec<Prop>,
+    /// Header line of the `element` keyword.
+    line: usize,
+}
+
+impl Element {
+    /// Fewest bytes one binary row can take.
+    fn min_binary_row(&self) -> u64 {
+        self.props
+            .iter()
+            .map(|p| match p.kind {
+                Kind::Scalar(s) => s.size() as u64,
+                Kind::List(c, _) => c.size() as u64,
+            })
+            .sum()
+    }
+
+    /// Fewest bytes one ascii row can take (one character and one separator per value).
+    fn min_ascii_row(&self) -> u64 {
+        2 * self.props.len() as u64
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Encoding {
+    Ascii,
+    BinaryLe,
+    BinaryBe,
+}
+
+struct Header {
+    encoding: Encoding,
+    elements: Vec<Element>,
+    /// Bytes taken by the header, up to and including the `end_header` line.
+    len: u64,
+    /// Lines taken by the header.
+    lines: usize,
+}
+
+fn parse_header<R: BufRead>(path: &Path, r: &mut R) -> Result<Header, CloudError> {
+    let mut encoding = None;
+    let mut elements: Vec<Element> = Vec::new();
+    let mut len = 0u64;
+    let mut lineno = 0usize;
+    loop {
+        lineno += 1;
+        let at = format!("line {lineno}");
+        if lineno > MAX_HEADER_LINES {
+            return Err(header_err(path, at, "header too long (no 'end_header')"));
+        }
+        let bytes = match read_line_capped(r, MAX_HEADER_LINE).map_err(|e| io_err(path, e))? {
+            Line::Eof if lineno == 1 => return Err(header_err(path, at, "empty file")),
+            Line::Eof => return Err(header_err(path, at, "file ends before 'end_header'")),
+            Line::TooLong => return Err(header_err(path, at, "header line too long")),
+            Line::Text(b, n) => {
+                len += n as u64;
+                b
+            }
+        };
+        let Ok(text) = std::str::from_utf8(&bytes) else {
+            let what = if lineno == 1 {
+                "not a PLY file (first line is not 'ply')"
+            } else {
+                "header line is not text"
+            };
+            return Err(header_err(path, at, what));
+        };
+        let words: Vec<&str> = text.split_whitespace().collect();
+        if lineno == 1 {
+            if words != ["ply"] {
+                return Err(header_err(
+                    path,
+                    at,
+                    "not a PLY file (first line is not 'ply')",
+                ));
+            }
+            continue;
+        }
+        match words.first().copied() {
+            None => {}
+            Some("comment") | Some("obj_info") => {}
+            Some("format") => {
+                if encoding.is_some() {
+                    return Err(header_err(path, at, "second 'format' line"));
+                }
+                let e = match words.get(1).copied() {
+                    Some("ascii") => Encoding::Ascii,
+                    Some("binary_little_endian") => Encoding::BinaryLe,
+                    Some("binary_big_endian") => Encoding::BinaryBe,
+                    other => {
+                        return Err(header_err(
+                            path,
+                            at,
+                            format!("unknown format '{}'", other.unwrap_or("")),
+                        ))
+                    }
+                };
+                if words.len() != 3 {
+                    return Err(header_err(path, at, "expected 'format <encoding> 1.0'"));
+                }
+                encoding = Some(e);
+            }
+            Some("element") => {
+                let (Some(name), Some(count), 3) = (words.get(1), words.get(2), words.len()) else {
+                    return Err(header_err(path, at, "expected 'element <name> <count>'"));
+                };
+                let Ok(count) = count.parse::<u64>() else {
+                    return Err(header_err(
+                        path,
+                        at,
+                        format!("element count '{count}' is not a non-negative integer"),
+                    ));
+                };
+                elements.push(Element {
+                    name: (*name).to_string(),
+                    count,
+                    props: Vec::new(),
+                    line: lineno,
+                });
+            }
+            Some("property") => {
+                let Some(elem) = elements.last_mut() else {
+                    return Err(header_err(path, at, "'property' before any 'element'"));
+                };
+                let bad_type = |t: &str| header_err(path, &at, format!("unknown type '{t}'"));
+                let (kind, name) = match words.get(1).copied() {
+                    Some("list") => {
+                        if words.len() != 5 {
+                            return Err(header_err(
+                                path,
+                                at,
+                                "expected 'property list <count type> <item type> <name>'",
+                            ));
+                        }
+                        let c = Scalar::parse(words[2]).ok_or_else(|| bad_type(words[2]))?;
+                        let i = Scalar::parse(words[3]).ok_or_else(|| bad_type(words[3]))?;
+                        if !c.is_int() {
+                            return Err(header_err(path, at, "list count type must be an integer"));
+                        }
+                        (Kind::List(c, i), words[4])
+                    }
+                    Some(t) if words.len() == 3 => (
+                        Kind::Scalar(Scalar::parse(t).ok_or_else(|| bad_type(t))?),
+                        words[2],
+                    ),
+                    _ => return Err(header_err(path, at, "expected 'property <type> <name>'")),
+                };
+                elem.props.push(Prop {
+                    name: name.to_string(),
+                    kind,
+                });
+            }
+            Some("end_header") => break,
+            Some(other) => {
+                return Err(header_err(
+                    path,
+                    at,
+                    format!("unknown header keyword '{other}'"),
+                ))
+            }
+        }
+    }
+    let Some(encoding) = encoding else {
+        return Err(header_err(path, "line 2", "no 'format' line in header"));
+    };
+    Ok(Header {
+        encoding,
+        elements,
+        len,
+        lines: lineno,
+    })
+}
+
+/// The index of the `vertex` element and of its x, y, z properties.
+fn find_xyz(path: &Path, h: &Header) -> Result<(usize, [usize; 3]), CloudError> {
+    let Some(vi) = h.elements.iter().position(|e| e.name == "vertex") else {
+        return Err(header_err(path, "end_header", "no 'vertex' element"));
+    };
+    let v = &h.elements[vi];
+    let mut idx = [0usize; 3];
+    for (k, name) in ["x", "y", "z"].iter().enumerate() {
+        let Some(pi) = v.props.iter().position(|p| p.name == *name) else {
+            return Err(header_err(
+                path,
+                format!("line {}", v.line),
+                format!("element 'vertex' has no property '{name}'"),
+            ));
+        };
+        if !matches!(v.props[pi].kind, Kind::Scalar(_)) {
+            return Err(header_err(
+                path,
+                format!("line {}", v.line),
+                format!("vertex property '{name}' is a list, expected a number"),
+            ));
+        }
+        idx[k] = pi;
+    }
+    Ok((vi, idx))
+}
+
+/// Reads the vertices of a PLY file as points (metres, file frame); faces and other elements
+/// are ignored. Non-finite coordinates are kept as they are.
+pub fn read_ply(path: &Path) -> Result<Vec<Point3<f64>>, CloudError> {
+    let file = File::open(path).map_err(|e| io_err(path, e))?;
+    let file_len = file.metadata().map_err(|e| io_err(path, e))?.len();
+    let mut r = BufReader::with_capacity(1 << 16, file);
+    let header = parse_header(path, &mut r)?;
+    let (vi, xyz) = find_xyz(path, &header)?;
+    let body_len = file_len.saturating_sub(header.len);
+
+    // Every element up to the vertices must fit in the body, before anything is allocated.
+    let mut need = 0u64;
+    for e in &header.elements[..=vi] {
+        let row = match header.encoding {
+            Encoding::Ascii => e.min_ascii_row(),
+            _ => e.min_binary_row(),
+        };
+        need = e
+            .count
+            .checked_mul(row)
+            .and_then(|b| b.checked_add(need))
+            .unwrap_or(u64::MAX);
+        // An ascii file may lack its last newline.
+        let slack = u64::from(header.encoding == Encoding::Ascii);
+        if need > body_len + slack {
+            return Err(body_err(
+                path,
+                format!("byte {}", header.len),
+                format!(
+                    "file too short: header declares {} '{}' elements, needing at least \
+                     {need} data bytes, but there are only {body_len}",
+                    e.count, e.name
+                ),
+            ));
+        }
+    }
+
+    match header.encoding {
+        Encoding::Ascii => read_ascii_body(path, &mut r, &header, vi, xyz),
+        enc => {
+            let mut src = Src { r, pos: header.len };
+            read_binary_body(path, &mut src, &header, vi, xyz, enc == Encoding::BinaryBe)
+        }
+    }
+}
+
+/// A reader that knows its byte offset in the file.
+struct Src<R> {
+    r: R,
+    pos: u64,
+}
+
+impl<R: Read> Src<R> {
+    fn read_exact(&mut self, buf: &mut [u8]) -> io::Result<()> {
+        self.r.read_exact(buf)?;
+        self.pos += buf.len() as u64;
+        Ok(())
+    }
+
+    fn skip(&mut self, n: u64) -> io::Result<()> {
+        let got = io::copy(&mut self.r.by_ref().take(n), &mut io::sink())?;
+        self.pos += got;
+        if got < n {
+            return Err(io::ErrorKind::UnexpectedEof.into());
+        }
+        Ok(())
+    }
+}
+
+fn read_binary_body<R: Read>(
+    path: &Path,
+    src: &mut Src<R>,
+    h: &Header,
+    vi: usize,
+    xyz: [usize; 3],
+    big: bool,
+) -> Result<Vec<Point3<f64>>, CloudError> {
+    for e in &h.elements[..vi] {
+        skip_binary_element(path, src, e, big)?;
+    }
+    let v = &h.elements[vi];
+    let mut out = Vec::with_capacity((v.count as usize).min(MAX_PREALLOC));
+    let mut buf = [0u8; 8];
+    let mut vals = [0f64; 3];
+    for i in 0..v.count {
+        let start = src.pos;
+        for (pi, p) in v.props.iter().enumerate() {
+            let res = match p.kind {
+                Kind::Scalar(s) => src.read_exact(&mut buf[..s.size()]).map(|()| {
+                    if let Some(k) = xyz.iter().position(|&x| x == pi) {
+                        vals[k] = s.decode(&buf, big);
+                    }
+                }),
+                Kind::List(c, item) => skip_list(path, src, c, item, big, &mut buf)?,
+            };
+            res.map_err(|e| binary_read_err(path, e, src.pos, "vertex", i, start))?;
+        }
+        out.push(Point3::new(vals[0], vals[1], vals[2]));
+    }
+    Ok(out)
+}
+
+/// Reads a list count and skips the items; the outer result is a bad count, the inner one I/O.
+fn skip_list<R: Read>(
+    path: &Path,
+    src: &mut Src<R>,
+    c: Scalar,
+    item: Scalar,
+    big: bool,
+    buf: &mut [u8; 8],
+) -> Result<io::Result<()>, CloudError> {
+    if let Err(e) = src.read_exact(&mut buf[..c.size()]) {
+        return Ok(Err(e));
+    }
+    let n = c.decode(&buf[..], big);
+    if n < 0.0 {
+        return Err(body_err(
+            path,
+            format!("byte {}", src.pos - c.size() as u64),
+            format!("negative list length {n}"),
+        ));
+    }
+    // n is an integer of at most 32 bits, so the product cannot overflow.
+    Ok(src.skip(n as u64 * item.size() as u64))
+}
+
+fn binary_read_err(
+    path: &Path,
+    e: io::Error,
+    pos: u64,
+    name: &str,
+    i: u64,
+    start: u64,
+) -> CloudError {
+    if e.kind() == io::ErrorKind::UnexpectedEof {
+        body_err(
+            path,
+            format!("byte {pos}"),
+            format!("file ends inside {name} {i} (which starts at byte {start})"),
+        )
+    } else {
+        io_err(path, e)
+    }
+}
+
+fn skip_binary_element<R: Read>(
+    path: &Path,
+    src: &mut Src<R>,
+    e: &Element,
+    big: bool,
+) -> Result<(), CloudError> {
+    let has_list = e.props.iter().any(|p| matches!(p.kind, Kind::List(..)));
+    if !has_list {
+        // Fixed rows: one skip (the size was checked against the file already).
+        let start = src.pos;
+        return src
+            .skip(e.count.saturating_mul(e.min_binary_row()))
+            .map_err(|err| binary_read_err(path, err, src.pos, &e.name, 0, start));
+    }
+    let mut buf = [0u8; 8];
+    for i in 0..e.count {
+        let start = src.pos;
+        for p in &e.props {
+            let res = match p.kind {
+                Kind::Scalar(s) => src.skip(s.size() as u64),
+                Kind::List(c, item) => skip_list(path, src, c, item, big, &mut buf)?,
+            };
+            res.map_err(|err| binary_read_err(path, err, src.pos, &e.name, i, start))?;
+        }
+    }
+    Ok(())
+}
+
+fn read_ascii_body<R: BufRead>(
+    path: &Path,
+    r: &mut R,
+    h: &Header,
+    vi: usize,
+    xyz: [usize; 3],
+) -> Result<Vec<Point3<f64>>, CloudError> {
+    let mut line_no = AsciiLines { lineno: h.lines };
+    let v = &h.elements[vi];
+    for e in &h.elements[..vi] {
+        for i in 0..e.count {
+            let (text, at) = line_no.next(path, r, &e.name, i)?;
+            check_ascii_row(path, &text, e, &at)?;
+        }
+    }
+    let mut out = Vec::with_capacity((v.count as usize).min(MAX_PREALLOC));
+    for i in 0..v.count {
+        let (text, at) = line_no.next(path, r, "vertex", i)?;
+        let toks: Vec<&str> = text.split_ascii_whitespace().collect();
+        let starts = check_ascii_row(path, &text, v, &at)?;
+        let mut vals = [0f64; 3];
+        for (k, &pi) in xyz.iter().enumerate() {
+            let t = toks[starts[pi]];
+            let x = t.parse::<f64>().map_err(|_| {
+                body_err(
+                    path,
+                    &at,
+                    format!("vertex {i}: '{}' is not a number", shorten(t)),
+                )
+            })?;
+            // A `float` property holds what a binary file would: the value rounded to f32.
+            vals[k] = match v.props[pi].kind {
+                Kind::Scalar(Scalar::F32) => f64::from(x as f32),
+                _ => x,
+            };
+        }
+        out.push(Point3::new(vals[0], vals[1], vals[2]));
+    }
+    Ok(out)
+}
+
+/// Checks that an ascii row has the values its element declares (lists included), and
+/// returns the index of the first token of each property.
+fn check_ascii_row(
+    path: &Path,
+    text: &str,
+    e: &Element,
+    at: &str,
+) -> Result<Vec<usize>, CloudError> {
+    let mut toks = text.split_ascii_whitespace();
+    let mut starts = Vec::with_capacity(e.props.len());
+    let mut used = 0usize;
+    for p in &e.props {
+        starts.push(used);
+        used += 1;
+        let Some(t) = toks.next() else {
+            return Err(body_err(
+                path,
+                at,
+                format!("'{}' row has no value for property '{}'", e.name, p.name),
+            ));
+        };
+        if let Kind::List(..) = p.kind {
+            let n: u64 = t.parse().map_err(|_| {
+                body_err(
+                    path,
+                    at,
+                    format!("list length '{}' is not a non-negative integer", shorten(t)),
+                )
+            })?;
+            for _ in 0..n {
+                used += 1;
+                if toks.next().is_none() {
+                    return Err(body_err(
+                        path,
+                        at,
+                        format!("list '{}' declares {n} items but the line ends", p.name),
+                    ));
+                }
+            }
+        }
+    }
+    if toks.next().is_some() {
+        return Err(body_err(
+            path,
+            at,
+            format!(
+                "'{}' row has more values than the {} properties the header declares",
+                e.name,
+                e.props.len()
+            ),
+        ));
+    }
+    Ok(starts)
+}
+
+/// Walks the ascii body line by line, keeping the file line number.
+struct AsciiLines {
+    lineno: usize,
+}
+
+impl AsciiLines {
+    fn next<R: BufRead>(
+        &mut self,
+        path: &Path,
+        r: &mut R,
+        name: &str,
+        i: u64,
+    ) -> Result<(String, String), CloudError> {
+        loop {
+            self.lineno += 1;
+            let at = format!("line {}", self.lineno);
+            match read_line_capped(r, 1 << 20).map_err(|e| io_err(path, e))? {
+                Line::Eof => {
+                    return Err(body_err(path, at, format!("file ends before {name} {i}")))
+                }
+                Line::TooLong => return Err(body_err(path, at, "line too long")),
+                Line::Text(b, _) => {
+                    let Ok(s) = String::from_utf8(b) else {
+                        return Err(body_err(path, at, "line is not text"));
+                    };
+                    if s.trim().is_empty() {
+                        continue;
+                    }
+                    return Ok((s, at));
+                }
+            }
+        }
+    }
+}
+
+/// At most 32 characters of `s`, for error messages.
+pub(super) fn shorten(s: &str) -> String {
+    let mut out: String = s.chars().take(32).collect();
+    if out.len() < s.len() {
+        out.push_str("...");
+    }
+    out
+}
+
+/// Writes points (metres) as a PLY file: vertex `x`, `y`, `z` as `float`, then one `float`
+/// property per entry of `extra` (its name and one value per point, e.g. `detection`).
+///
+/// `binary` selects `binary_little_endian`, otherwise `ascii`. The file is written to
+/// `<name>.tmp-<pid>` in the same directory and renamed into place, so readers never see a
+/// half-written file; the temporary file is removed on error.
+pub fn write_ply_points(
+    path: &Path,
+    points: &[Point3<f64>],
+    extra: &[(&str, Vec<f64>)],
+    binary: bool,
+) -> Result<(), CloudError> {
+    for (name, values) in extra {
+        let at = format!("property '{name}'");
+        if name.is_empty() || name.chars().any(|c| c.is_whitespace() || c.is_control()) {
+            return Err(header_err(path, at, "property name must be one word"));
+        }
+        if ["x", "y", "z"].contains(name) || extra.iter().filter(|(n, _)| n == name).count() > 1 {
+            return Err(header_err(path, at, "property name used twice"));
+        }
+        if values.len() != points.len() {
+            return Err(header_err(
+                path,
+                at,
+                format!("{} values for {} points", values.len(), points.len()),
+            ));
+        }
+    }
+    let tmp = temp_path(path);
+    let result = File::create(&tmp)
+        .and_then(|f| {
+            let mut w = BufWriter::new(f);
+            write_body(&mut w, points, extra, binary)?;
+            let f = w.into_inner().map_err(|e| e.into_error())?;
+            f.sync_all()
+        })
+        .and_then(|()| std::fs::rename(&tmp, path));
+    result.map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io_err(path, e)
+    })
+}
+
+/// `<dir>/<name>.tmp-<pid>` next to `path`.
+fn temp_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(format!(".tmp-{}", std::process::id()));
+    path.with_file_name(name)
+}
+
+fn write_body<W: Write>(
+    w: &mut W,
+    points: &[Point3<f64>],
+    extra: &[(&str, Vec<f64>)],
+    binary: bool,
+) -> io::Result<()> {
+    let format = if binary {
+        "binary_little_endian"
+    } else {
+        "ascii"
+    };
+    writeln!(w, "ply\nformat {format} 1.0\ncomment written by afford")?;
+    writeln!(w, "element vertex {}", points.len())?;
+    for name in ["x", "y", "z"].iter().chain(extra.iter().map(|(n, _)| n)) {
+        writeln!(w, "property float {name}")?;
+    }
+    writeln!(w, "end_header")?;
+    for (i, p) in points.iter().enumerate() {
+        let values = p
+            .coords
+            .iter()
+            .copied()
+            .chain(extra.iter().map(|(_, v)| v[i]));
+        if binary {
+            for v in values {
+                w.write_all(&(v as f32).to_le_bytes())?;
+            }
+        } else {
+            for (k, v) in values.enumerate() {
+                let sep = if k == 0 { "" } else { " " };
+                let v = v as f32;
+                if v.is_nan() {
+                    // As C's printf writes it, which most PLY tools read.
+                    write!(w, "{sep}nan")?;
+                } else {
+                    write!(w, "{sep}{v}")?;
+                }
+            }
+            writeln!(w)?;
+        }
+    }
+    w.flush()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ply_rs_bw::ply::{
+        Addable, DefaultElement, ElementDef, Encoding as PlyEncoding, Ply, Property, PropertyDef,
+        PropertyType, ScalarType,
+    };
+
+    fn file(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> PathBuf {
+        let p = dir.path().join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    }
+
+    #[test]
+    fn ascii_with_leading_element_odd_order_lists_and_faces() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = "ply\r\nformat ascii 1.0\ncomment made by hand\nobj_info x\n\
+            element camera 1\nproperty float view_px\nproperty list uchar int junk\n\
+            element vertex 3\nproperty uchar red\nproperty float z\nproperty double nx\n\
+            property float x\nproperty list uchar float extra\nproperty float y\n\
+            element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+            1.5 2 7 8\n\
+            255 3.25 0.1 1 0 -2\n\
+            0 -1 0.2 4 2 9 9 5.5\n\n\
+            7 nan 0 1e3 1 0 0.125\n\
+            3 0 1 2\n";
+        let p = file(&dir, "a.ply", text.as_bytes());
+        let pts = read_ply(&p).unwrap();
+        assert_eq!(pts.len(), 3);
+        assert_eq!(pts[0], Point3::new(1.0, -2.0, 3.25));
+        assert_eq!(pts[1], Point3::new(4.0, 5.5, -1.0));
+        assert_eq!((pts[2].x, pts[2].y), (1000.0, 0.125));
+        assert!(pts[2].z.is_nan());
+    }
+
+    /// A binary PLY: a `camera` element with a list before the vertices, vertices with an
+    /// int and a double coordinate among other properties, then faces.
+    fn binary_file(big: bool, pts: &[[f64; 3]]) -> Vec<u8> {
+        let fmt = if big {
+            "binary_big_endian"
+        } else {
+            "binary_little_endian"
+        };
+        let mut b = format!(
+            "ply\nformat {fmt} 1.0\nelement camera 2\nproperty list uchar short ids\n\
+             property float w\nelement vertex {}\nproperty double y\nproperty uchar red\n\
+             property float x\nproperty short z\nproperty float detection\n\
+             element face 1\nproperty list uchar int vertex_indices\nend_header\n",
+            pts.len()
+        )
+        .into_bytes();
+        macro_rules! put {
+            ($v:expr) => {
+                if big {
+                    b.extend_from_slice(&$v.to_be_bytes())
+                } else {
+                    b.extend_from_slice(&$v.to_le_bytes())
+                }
+            };
+        }
+        // camera 0: 2 ids; camera 1: none.
+        put!(2u8);
+        put!(7i16);
+        put!(-7i16);
+        put!(1.0f32);
+        put!(0u8);
+        put!(2.0f32);
+        for p in pts {
+            put!(p[1]);
+            put!(200u8);
+            put!(p[0] as f32);
+            put!(p[2] as i16);
+            put!(0.75f32);
+        }
+        put!(3u8);
+        for i in 0..3i32 {
+            put!(i);
+        }
+        b
+    }
+
+    #[test]
+    fn binary_little_and_big_endian() {
+        let dir = tempfile::tempdir().unwrap();
+        let pts = [[0.5, 0.1, -3.0], [-1.25, 1e-9, 42.0], [7.0, -2.5, 0.0]];
+        for big in [false, true] {
+            let p = file(&dir, "b.ply", &binary_file(big, &pts));
+            let got = read_ply(&p).unwrap();
+            let want: Vec<_> = pts.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
+            assert_eq!(got, want, "big endian: {big}");
+        }
+    }
+
+    /// Writes a PLY with ply-rs-bw (double x, float y, int z, a leading `quality` property and
+    /// faces) and checks our reader sees the same points, in all three encodings.
+    #[test]
+    fn reads_what_ply_rs_bw_writes() {
+        let dir = tempfile::tempdir().unwrap();
+        let pts = [[1.0, 2.5, -3.0], [-0.1, 0.0, 12.0], [1e6, -7.75, 0.0]];
+        for enc in [
+            PlyEncoding::Ascii,
+            PlyEncoding::BinaryLittleEndian,
+            PlyEncoding::BinaryBigEndian,
+        ] {
+            let mut ply = Ply::<DefaultElement>::new();
+            ply.header.encoding = enc;
+            let mut v = ElementDef::new("vertex".to_string());
+            for (n, t) in [
+                ("quality", ScalarType::UChar),
+                ("z", ScalarType::Int),
+                ("x", ScalarType::Double),
+                ("y", ScalarType::Float),
+            ] {
+                v.properties
+                    .add(PropertyDef::new(n.to_string(), PropertyType::Scalar(t)));
+            }
+            ply.header.elements.add(v);
+            let mut f = ElementDef::new("face".to_string());
+            f.properties.add(PropertyDef::new(
+                "vertex_indices".to_string(),
+                PropertyType::List(ScalarType::UChar, ScalarType::Int),
+            ));
+            ply.header.elements.add(f);
+            let verts = pts
+                .iter()
+                .map(|p| {
+                    let mut e = DefaultElement::new();
+                    e.insert("quality".to_string(), Property::UChar(9));
+                    e.insert("z".to_string(), Property::Int(p[2] as i32));
+                    e.insert("x".to_string(), Property::Double(p[0]));
+                    e.insert("y".to_string(), Property::Float(p[1] as f32));
+                    e
+                })
+                .collect();
+            ply.payload.insert("vertex".to_string(), verts);
+            let mut face = DefaultElement::new();
+            face.insert(
+                "vertex_indices".to_string(),
+                Property::ListInt(vec![0, 1, 2]),
+            );
+            ply.payload.insert("face".to_string(), vec![face]);
+            let mut buf = Vec::new();
+            ply_rs_bw::writer::Writer::new()
+                .write_ply(&mut buf, &mut ply)
+                .unwrap();
+            let p = file(&dir, "w.ply", &buf);
+            let got = read_ply(&p).unwrap();
+            let want: Vec<_> = pts
+                .iter()
+                .map(|p| Point3::new(p[0], f64::from(p[1] as f32), p[2]))
+                .collect();
+            assert_eq!(got, want, "{enc:?}");
+        }
+    }
+
+    #[test]
+    fn writer_round_trips_through_our_reader_and_ply_rs_bw() {
+        let dir = tempfile::tempdir().unwrap();
+        let pts = vec![
+            Point3::new(0.5, -1.25, 3.0),
+            Point3::new(1e-3, 2.0, -0.0),
+            Point3::new(f64::NAN, 4.0, 5.0),
+        ];
+        let det = vec![1.0, 0.0, 2.0];
+        let score = vec![0.25, -1.0, 0.5];
+        for binary in [false, true] {
+            let p = dir.path().join("out.ply");
+            write_ply_points(
+                &p,
+                &pts,
+                &[("detection", det.clone()), ("score", score.clone())],
+                binary,
+            )
+            .unwrap();
+            let got = read_ply(&p).unwrap();
+            assert_eq!(got[0], pts[0]);
+            assert_eq!(got[1], Point3::new(f64::from(1e-3f32), 2.0, 0.0));
+            assert!(got[1].z.is_sign_negative());
+            assert!(got[2].x.is_nan() && got[2].z == 5.0);
+
+            if !binary {
+                let text = std::fs::read_to_string(&p).unwrap();
+                let body: Vec<_> = text.lines().skip_while(|l| *l != "end_header").collect();
+                assert_eq!(
+                    body,
+                    [
+                        "end_header",
+                        "0.5 -1.25 3 1 0.25",
+                        "0.001 2 -0 0 -1",
+                        "nan 4 5 2 0.5"
+                    ]
+                );
+                // ply-rs-bw does not read `nan` in ascii: cross-check binary files only.
+                continue;
+            }
+            let mut f = File::open(&p).unwrap();
+            let ply = ply_rs_bw::parser::Parser::<DefaultElement>::new()
+                .read_ply(&mut f)
+                .unwrap();
+            let v = &ply.payload["vertex"];
+            let d: Vec<_> = v.iter().map(|e| e["detection"].clone()).collect();
+            assert_eq!(
+                d,
+                vec![
+                    Property::Float(1.0),
+                    Property::Float(0.0),
+                    Property::Float(2.0)
+                ]
+            );
+            assert_eq!(v[1]["score"], Property::Float(-1.0));
+            let names: Vec<_> = ply.header.elements["vertex"].properties.keys().collect();
+            assert_eq!(names, ["x", "y", "z", "detection", "score"]);
+            let entries: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+            assert_eq!(entries.len(), 1, "temporary file left behind");
+        }
+    }
+
+    #[test]
+    fn writer_rejects_bad_extras_and_leaves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("o.ply");
+        let pts = [Point3::origin(), Point3::new(1.0, 1.0, 1.0)];
+        let e = write_ply_points(&p, &pts, &[("d", vec![1.0])], true).unwrap_err();
+        assert!(matches!(e, CloudError::Header { .. }), "{e}");
+        let e = write_ply_points(&p, &pts, &[("x", vec![1.0, 2.0])], true).unwrap_err();
+        assert!(matches!(e, CloudError::Header { .. }), "{e}");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        // A directory that does not exist: Io error, no panic.
+        let e = write_ply_points(&dir.path().join("no/o.ply"), &pts, &[], false).unwrap_err();
+        assert!(matches!(e, CloudError::Io { .. }), "{e}");
+    }
+
+    #[test]
+    fn truncated_binary_is_a_body_error_naming_where() {
+        let dir = tempfile::tempdir().unwrap();
+        let full = binary_file(false, &[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+        let header_len = full.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+        let faces = 1 + 3 * 4;
+        // Cameras take 14 bytes (10 at least), vertices 2 x 19: cut 2 bytes into the
+        // vertices' end. The size check (48 bytes at least) passes; the read itself fails.
+        let cut = header_len + 14 + 38 - 2;
+        assert_eq!(cut, full.len() - faces - 2);
+        let p = file(&dir, "t.ply", &full[..cut]);
+        let e = read_ply(&p).unwrap_err();
+        match &e {
+            CloudError::Body { at, what, .. } => {
+                // The cut property (`detection`, 4 bytes) starts 15 bytes into the vertex.
+                assert_eq!(at, &format!("byte {}", header_len + 14 + 19 + 15), "{e}");
+                assert!(what.contains("inside vertex 1"), "{e}");
+                assert!(
+                    what.contains(&format!("starts at byte {}", header_len + 14 + 19)),
+                    "{e}"
+                );
+            }
+            _ => panic!("expected Body error, got {e}"),
+        }
+        // Cut deeper: the size check itself fails, before reading.
+        let p = file(&dir, "u.ply", &full[..header_len + 30]);
+        let e = read_ply(&p).unwrap_err();
+        assert!(
+            matches!(&e, CloudError::Body { what, .. } if what.contains("2 'vertex' elements")),
+            "{e}"
+        );
+        // Truncated faces do not matter: the vertices are all there.
+        let p = file(&dir, "f.ply", &full[..full.len() - 2]);
+        assert_eq!(read_ply(&p).unwrap().len(), 2);
+    }
+
+    #[test]
+    fn huge_claimed_count_fails_fast_without_allocating() {
+        let dir = tempfile::tempdir().unwrap();
+        for fmt in ["binary_little_endian", "ascii"] {
+            let text = format!(
+                "ply\nformat {fmt} 1.0\nelement vertex 18446744073709551615\n\
+                 property float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n"
+            );
+            let p = file(&dir, "h.ply", text.as_bytes());
+            let e = read_ply(&p).unwrap_err();
+            assert!(matches!(e, CloudError::Body { .. }), "{e}");
+            assert!(e.to_string().contains("18446744073709551615"), "{e}");
+        }
+        // A huge face count after the vertices is never read.
+        let text = "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\n\
+                    property float y\nproperty float z\nelement face 4000000000\n\
+                    property list uchar int vertex_indices\nend_header\n";
+        let mut b = text.as_bytes().to_vec();
+        for v in [1.0f32, 2.0, 3.0] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        let p = file(&dir, "f.ply", &b);
+        assert_eq!(read_ply(&p).unwrap(), vec![Point3::new(1.0, 2.0, 3.0)]);
+    }
+
+    #[test]
+    fn header_errors_name_the_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let cases: &[(&[u8], &str, &str)] = &[
+            (b"", "line 1", "empty file"),
+            (b"\x00\x01\x02\xff\xfe garbage\n\x13", "line 1", "not a PLY file"),
+            (b"ply\nformat ascii 1.0\ncomment \xff\xfe\n", "line 3", "not text"),
+            (
+                b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float y\nproperty float z\nend_header\n1 2\n",
+                "line 3",
+                "no property 'x'",
+            ),
+            (
+                b"ply\nformat ascii 1.0\nelement face 0\nend_header\n",
+                "end_header",
+                "no 'vertex' element",
+            ),
+            (b"ply\nformat ascii 1.0\nelement vertex 1\n", "line 4", "before 'end_header'"),
+            (b"ply\nformat utf8 1.0\n", "line 2", "unknown format"),
+            (b"ply\nformat ascii 1.0\nproperty float x\n", "line 3", "before any 'element'"),
+            (
+                b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float128 x\n",
+                "line 4",
+                "unknown type",
+            ),
+            (b"ply\nelement vertex 0\nend_header\n", "line 2", "no 'format'"),
+        ];
+        for (bytes, at_want, what_want) in cases {
+            let p = file(&dir, "e.ply", bytes);
+            let e = read_ply(&p).unwrap_err();
+            let msg = e.to_string();
+            match &e {
+                CloudError::Header { at, what, .. } => {
+                    assert_eq!(at, at_want, "{msg}");
+                    assert!(what.contains(what_want), "{msg}");
+                }
+                _ => panic!("expected Header error, got {msg}"),
+            }
+            assert!(!msg.contains('\n'), "{msg}");
+            assert!(msg.starts_with(&p.display().to_string()), "{msg}");
+        }
+    }
+
+    #[test]
+    fn ascii_body_errors_name_the_file_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let head = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n\
+                    property float y\nproperty float z\nend_header\n";
+        for (body, what) in [
+            ("1 2 3\n4 5          \n", "no value for property 'z'"),
+            ("1 2 3\n4 5 6 7\n", "more values"),
+            ("1 2 3\n4 abc 6\n", "'abc' is not a number"),
+        ] {
+            let p = file(&dir, "a.ply", format!("{head}{body}").as_bytes());
+            let e = read_ply(&p).unwrap_err();
+            assert!(
+                matches!(&e, CloudError::Body { at, what: w, .. } if at == "line 9" && w.contains(what)),
+                "{e}"
+            );
+        }
+        // Fewer rows than declared, with room in the size check.
+        let p = file(&dir, "s.ply", format!("{head}1 2 3      \n").as_bytes());
+        let e = read_ply(&p).unwrap_err();
+        assert!(
+            matches!(&e, CloudError::Body { at, .. } if at == "line 9"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn random_garbage_never_panics() {
+        let dir = tempfile::tempdir().unwrap();
+        let good = binary_file(true, &[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        for round in 0..300 {
+            let mut b = good.clone();
+            for _ in 0..1 + round % 6 {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                let i = (seed % b.len() as u64) as usize;
+                b[i] = (seed >> 32) as u8;
+            }
+            b.truncate((seed >> 40) as usize % (b.len() + 1));
+            let p = file(&dir, "g.ply", &b);
+            let _ = read_ply(&p);
+        }
+    }
+}

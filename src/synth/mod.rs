@@ -1,1 +1,13 @@
 //! Procedural furniture and scenes with known affordances, for tests and labelled data.
+//!
+//! [`mesh`] holds labelled triangle meshes (boxes, cylinders) and a deterministic surface
+//! sampler that turns them into point clouds; [`furniture`] builds parametric chairs,
+//! stools, sofas, benches, beds (positives) and tables, desks, shelves, cabinets, walls,
+//! floors (negatives) from them. World frame: metres, z up, floor at z = 0; seating
+//! furniture faces +x (the backrest is on the -x side).
+
+pub mod furniture;
+pub mod mesh;
+
+pub use furniture::*;
+pub use mesh::{sample_surface, Mesh, Part};

@@ -1,0 +1,411 @@
+//! The agent H of the paper (section 3.1): a directed rooted tree whose nodes are joints
+//! rotating about one axis and whose edges are body parts approximated by cylinders.
+//!
+//! Frames: the agent frame has x forward (the way the agent faces), y to its left and
+//! z up; every joint angle is 0 in the upright standing pose. Lengths in the model file
+//! are fractions of body height H; [`Agent::load`] scales them to metres.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
+use serde::Deserialize;
+
+use crate::model::{invalid, read_toml, ModelError};
+
+/// One joint (a vertex of H) with its optional body part (the edge to its parent's frame).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Joint {
+    /// Name used by hierarchy files.
+    pub name: String,
+    /// Index of the parent joint; `None` for the root (the pelvis).
+    pub parent: Option<usize>,
+    /// Position of this joint in its parent's frame, metres.
+    pub origin: Vector3<f64>,
+    /// Rotation axis in the parent's frame (unit); a positive angle turns by the right-hand rule.
+    pub axis: Unit<Vector3<f64>>,
+    /// Anatomical limits `(lower, upper)`, radians.
+    pub limit: (f64, f64),
+    /// The body part carried by this joint, if any.
+    pub link: Option<Link>,
+}
+
+/// A body part: a cylinder between two points of its joint's frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Link {
+    /// Name used by hierarchy files (for example `thigh_l`).
+    pub name: String,
+    /// Start of the cylinder axis in the joint frame, metres.
+    pub from: Point3<f64>,
+    /// End of the cylinder axis in the joint frame, metres.
+    pub to: Point3<f64>,
+    /// Cylinder radius, metres.
+    pub radius: f64,
+}
+
+/// A body part placed in the world: a cylinder from `a` to `b` (metres, world frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cylinder {
+    /// Index of the joint that carries it (also the link's index).
+    pub joint: usize,
+    /// Start of the axis, world frame, metres.
+    pub a: Point3<f64>,
+    /// End of the axis, world frame, metres.
+    pub b: Point3<f64>,
+    /// Radius, metres.
+    pub radius: f64,
+}
+
+/// The whole agent scaled to one body height, joints in topological order (parents first).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Agent {
+    /// Model name.
+    pub name: String,
+    /// Body height H, metres.
+    pub height: f64,
+    /// Joints, parents before children.
+    pub joints: Vec<Joint>,
+}
+
+/// Where the agent stands: its root joint (pelvis) in the world and its heading.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// The root joint's position, world frame, metres.
+    pub position: Point3<f64>,
+    /// Heading about world z, radians; 0 faces +x.
+    pub yaw: f64,
+}
+
+/// The state of every joint: angle (radians) and axis (unit, parent frame).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Posture {
+    /// Angle of each joint, radians, indexed like [`Agent::joints`].
+    pub angles: Vec<f64>,
+    /// Axis of each joint (a hierarchy node may turn a joint about another axis).
+    pub axes: Vec<Unit<Vector3<f64>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AgentFile {
+    name: String,
+    joint: Vec<JointFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JointFile {
+    name: String,
+    #[serde(default)]
+    parent: Option<String>,
+    origin: [f64; 3],
+    axis: [f64; 3],
+    limit: LimitFile,
+    #[serde(default)]
+    link: Option<LinkFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LimitFile {
+    lower: f64,
+    upper: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LinkFile {
+    name: String,
+    from: [f64; 3],
+    to: [f64; 3],
+    radius: f64,
+}
+
+impl Agent {
+    /// Loads an agent file and scales it to body height `height` (metres).
+    pub fn load(path: &Path, height: f64) -> Result<Agent, ModelError> {
+        let file: AgentFile = read_toml(path)?;
+        Self::from_file(file, path, height)
+    }
+
+    /// Parses agent TOML text (`path` only names the source in errors).
+    pub fn from_toml(text: &str, path: &Path, height: f64) -> Result<Agent, ModelError> {
+        let file: AgentFile = crate::model::parse_toml(text, path)?;
+        Self::from_file(file, path, height)
+    }
+
+    fn from_file(file: AgentFile, path: &Path, height: f64) -> Result<Agent, ModelError> {
+        if !(height.is_finite() && height > 0.3 && height < 3.0) {
+            return Err(invalid(
+                path,
+                "height",
+                format!("body height {height} m is outside 0.3-3.0 m"),
+            ));
+        }
+        // Topological order: repeatedly take joints whose parent is already placed.
+        let mut index: HashMap<String, usize> = HashMap::new();
+        let mut joints: Vec<Joint> = Vec::with_capacity(file.joint.len());
+        let mut pending: Vec<&JointFile> = file.joint.iter().collect();
+        let mut names = std::collections::HashSet::new();
+        let mut link_names = std::collections::HashSet::new();
+        for j in &file.joint {
+            if !names.insert(j.name.as_str()) {
+                return Err(invalid(path, format!("joint.{}", j.name), "duplicate joint name"));
+            }
+            if let Some(p) = &j.parent {
+                if !file.joint.iter().any(|k| &k.name == p) {
+                    return Err(invalid(
+                        path,
+                        format!("joint.{}.parent", j.name),
+                        format!("unknown parent joint `{p}`"),
+                    ));
+                }
+            }
+            if let Some(l) = &j.link {
+                if !link_names.insert(l.name.as_str()) {
+                    return Err(invalid(path, format!("joint.{}.link.name", j.name), "duplicate link name"));
+                }
+            }
+        }
+        if file.joint.iter().filter(|j| j.parent.is_none()).count() != 1 {
+            return Err(invalid(path, "joint", "exactly one joint must have no parent (the root)"));
+        }
+        while !pending.is_empty() {
+            let before = pending.len();
+            let mut rest = Vec::new();
+            for j in pending {
+                let parent = match &j.parent {
+                    None => None,
+                    Some(p) => match index.get(p) {
+                        Some(&i) => Some(i),
+                        None => {
+                            rest.push(j);
+                            continue;
+                        }
+                    },
+                };
+                let joint = Self::joint(j, parent, path, height)?;
+                index.insert(j.name.clone(), joints.len());
+                joints.push(joint);
+            }
+            if rest.len() == before {
+                return Err(invalid(
+                    path,
+                    format!("joint.{}.parent", rest[0].name),
+                    "the joints form a cycle",
+                ));
+            }
+            pending = rest;
+        }
+        Ok(Agent {
+            name: file.name,
+            height,
+            joints,
+        })
+    }
+
+    fn joint(j: &JointFile, parent: Option<usize>, path: &Path, h: f64) -> Result<Joint, ModelError> {
+        let key = |k: &str| format!("joint.{}.{k}", j.name);
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        if !finite(&j.origin) {
+            return Err(invalid(path, key("origin"), "not finite"));
+        }
+        let axis = Vector3::from(j.axis);
+        if !finite(&j.axis) || axis.norm() < 1e-9 {
+            return Err(invalid(path, key("axis"), "must be a non-zero vector"));
+        }
+        if !(j.limit.lower.is_finite() && j.limit.upper.is_finite()) || j.limit.lower > j.limit.upper {
+            return Err(invalid(path, key("limit"), "lower must not exceed upper"));
+        }
+        let link = match &j.link {
+            None => None,
+            Some(l) => {
+                let (from, to) = (Point3::from(l.from) * h, Point3::from(l.to) * h);
+                if !finite(&l.from) || !finite(&l.to) || (to - from).norm() < 1e-6 {
+                    return Err(invalid(path, key("link"), format!("link `{}` has zero length", l.name)));
+                }
+                if !(l.radius.is_finite() && l.radius > 0.0) {
+                    return Err(invalid(path, key("link.radius"), "must be positive"));
+                }
+                Some(Link {
+                    name: l.name.clone(),
+                    from,
+                    to,
+                    radius: l.radius * h,
+                })
+            }
+        };
+        Ok(Joint {
+            name: j.name.clone(),
+            parent,
+            origin: Vector3::from(j.origin) * h,
+            axis: Unit::new_normalize(axis),
+            limit: (j.limit.lower.to_radians(), j.limit.upper.to_radians()),
+            link,
+        })
+    }
+
+    /// Index of the joint named `name`.
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.joints.iter().position(|j| j.name == name)
+    }
+
+    /// Index of the joint carrying the link named `name`.
+    pub fn link_index(&self, name: &str) -> Option<usize> {
+        self.joints
+            .iter()
+            .position(|j| j.link.as_ref().is_some_and(|l| l.name == name))
+    }
+
+    /// The upright standing posture: every angle 0, every axis as in the model.
+    pub fn rest_posture(&self) -> Posture {
+        Posture {
+            angles: vec![0.0; self.joints.len()],
+            axes: self.joints.iter().map(|j| j.axis).collect(),
+        }
+    }
+
+    /// Whether joint `j` lies in the subtree of joint `root` (itself included).
+    pub fn is_descendant(&self, j: usize, root: usize) -> bool {
+        let mut k = Some(j);
+        while let Some(i) = k {
+            if i == root {
+                return true;
+            }
+            k = self.joints[i].parent;
+        }
+        false
+    }
+
+    /// Forward kinematics: the world frame of every joint for a placement and posture,
+    /// written into `frames` (resized to the number of joints).
+    pub fn forward_kinematics(&self, place: &Placement, posture: &Posture, frames: &mut Vec<Isometry3<f64>>) {
+        frames.clear();
+        let base = Isometry3::from_parts(
+            Translation3::from(place.position.coords),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), place.yaw),
+        );
+        for (i, j) in self.joints.iter().enumerate() {
+            let parent = j.parent.map_or(base, |p| frames[p]);
+            let local = Isometry3::from_parts(
+                Translation3::from(j.origin),
+                UnitQuaternion::from_axis_angle(&posture.axes[i], posture.angles[i]),
+            );
+            frames.push(parent * local);
+        }
+    }
+
+    /// The posed body parts (world frame) of the joints selected by `which`.
+    pub fn cylinders(&self, frames: &[Isometry3<f64>], which: impl Fn(usize) -> bool) -> Vec<Cylinder> {
+        self.joints
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| which(*i))
+            .filter_map(|(i, j)| {
+                j.link.as_ref().map(|l| Cylinder {
+                    joint: i,
+                    a: frames[i] * l.from,
+                    b: frames[i] * l.to,
+                    radius: l.radius,
+                })
+            })
+            .collect()
+    }
+
+    /// Largest distance (metres) from any point of the subtree of joint `j` to that joint's
+    /// origin, in any posture: bounds how far a rotation of `j` by one radian moves its parts.
+    pub fn reach(&self, j: usize) -> f64 {
+        fn depth(agent: &Agent, j: usize) -> f64 {
+            let own = agent.joints[j]
+                .link
+                .as_ref()
+                .map_or(0.0, |l| l.from.coords.norm().max(l.to.coords.norm()) + l.radius);
+            let kids = agent
+                .joints
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.parent == Some(j))
+                .map(|(c, cj)| cj.origin.norm() + depth(agent, c))
+                .fold(0.0, f64::max);
+            own.max(kids)
+        }
+        depth(self, j)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TWO_LINKS: &str = r#"
+name = "leg"
+[[joint]]
+name = "hip"
+origin = [0.0, 0.0, 0.5]
+axis = [0.0, -1.0, 0.0]
+limit = { lower = -30.0, upper = 120.0 }
+link = { name = "thigh", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius = 0.04 }
+[[joint]]
+name = "knee"
+parent = "hip"
+origin = [0.0, 0.0, -0.25]
+axis = [0.0, 1.0, 0.0]
+limit = { lower = 0.0, upper = 150.0 }
+link = { name = "shank", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius = 0.03 }
+"#;
+
+    fn leg(h: f64) -> Agent {
+        Agent::from_toml(TWO_LINKS, Path::new("leg.toml"), h).unwrap()
+    }
+
+    #[test]
+    fn scales_lengths_by_height() {
+        let a = leg(2.0);
+        assert_eq!(a.joints[1].origin, Vector3::new(0.0, 0.0, -0.5));
+        assert!((a.joints[0].link.as_ref().unwrap().radius - 0.08).abs() < 1e-12);
+    }
+
+    #[test]
+    fn forward_kinematics_of_a_seated_leg() {
+        // H = 2 m: hip at z = 1.0; thigh 0.5 m, shank 0.5 m. Hip flexed 90 deg about -y
+        // puts the thigh forward (+x); knee flexed 90 deg about +y brings the shank down.
+        let a = leg(2.0);
+        let mut p = a.rest_posture();
+        p.angles = vec![90f64.to_radians(), 90f64.to_radians()];
+        let mut f = Vec::new();
+        let place = Placement { position: Point3::new(1.0, 2.0, 0.0), yaw: 0.0 };
+        a.forward_kinematics(&place, &p, &mut f);
+        let c = a.cylinders(&f, |_| true);
+        assert!((c[0].b - Point3::new(1.5, 2.0, 1.0)).norm() < 1e-9, "knee at {:?}", c[0].b);
+        assert!((c[1].b - Point3::new(1.5, 2.0, 0.5)).norm() < 1e-9, "ankle at {:?}", c[1].b);
+        // Turning the agent by 90 deg about z makes it face +y.
+        let place = Placement { yaw: 90f64.to_radians(), ..place };
+        a.forward_kinematics(&place, &p, &mut f);
+        let c = a.cylinders(&f, |_| true);
+        assert!((c[0].b - Point3::new(1.0, 2.5, 1.0)).norm() < 1e-9, "knee at {:?}", c[0].b);
+    }
+
+    #[test]
+    fn reach_bounds_the_subtree() {
+        let a = leg(1.0);
+        // From the hip: 0.25 to the knee + 0.25 shank + 0.03 radius.
+        assert!((a.reach(0) - 0.53).abs() < 1e-9);
+        assert!((a.reach(1) - 0.28).abs() < 1e-9);
+    }
+
+    #[test]
+    fn rejects_unknown_parent_cycle_and_zero_links() {
+        let bad = TWO_LINKS.replace("parent = \"hip\"", "parent = \"hips\"");
+        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75).unwrap_err().to_string();
+        assert!(e.contains("joint.knee.parent") && e.contains("hips"), "{e}");
+        let bad = TWO_LINKS.replace("to = [0.0, 0.0, -0.25], radius = 0.03", "to = [0.0, 0.0, 0.0], radius = 0.03");
+        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75).unwrap_err().to_string();
+        assert!(e.contains("zero length"), "{e}");
+        let bad = TWO_LINKS.replace("name = \"hip\"\norigin", "name = \"hip\"\nparent = \"knee\"\norigin");
+        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75).unwrap_err().to_string();
+        assert!(e.contains("root") || e.contains("cycle"), "{e}");
+        let bad = TWO_LINKS.replace("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 1.0, 0.0]\ncolour = 3");
+        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75).unwrap_err().to_string();
+        assert!(e.contains("x.toml:") && e.contains("colour"), "{e}");
+    }
+}

@@ -1,0 +1,226 @@
+//! The pipeline of section 4, stage after stage: height map, hypotheses, scene, fitting,
+//! unfolding, selection and segmentation.
+
+use nalgebra::Point3;
+use rayon::prelude::*;
+
+use crate::agent::Agent;
+use crate::cloud::PointCloud;
+use crate::fit::{fit, ContactConfig};
+use crate::heightmap::HeightMap;
+use crate::hierarchy::Hierarchy;
+use crate::hypotheses::{hypotheses, Hypothesis};
+use crate::scene::{Scene, SceneConfig};
+use crate::select::{segment, suppress, SegmentConfig};
+use crate::unfold::{unfold, Unfolded};
+
+/// The scene-level numbers of a run (not per hierarchy). Defaults carry their reasons.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DetectConfig {
+    /// Height-map cell, metres.
+    pub heightmap_cell: f64,
+    /// Voxelisation of the scene.
+    pub scene: SceneConfig,
+    /// Contact location.
+    pub contact: ContactConfig,
+    /// Region growing.
+    pub segment: SegmentConfig,
+}
+
+impl Default for DetectConfig {
+    fn default() -> Self {
+        DetectConfig {
+            // Paper, section 4.1: 0.05 m balanced precision and time.
+            heightmap_cell: 0.05,
+            scene: SceneConfig {
+                // Issue 2: at most 0.02 m; finer than the 3-4 cm radius of the thinnest limb.
+                voxel_size: 0.02,
+                // Paper, section 3.1: agent and scene share the ground plane z = 0.
+                floor: true,
+                // The agent's limbs sweep up to ~0.3 m beyond a seat; further out the box bound suffices.
+                field_margin: 0.3,
+            },
+            // 5 mm: a quarter voxel, under 1 degree of trunk recline at shoulder height.
+            contact: ContactConfig { resolution: 0.005 },
+            segment: SegmentConfig {
+                // 1.5 voxels: closes gaps of depth-camera sampling at 1-2 m without jumping between objects.
+                grow_distance: 0.03,
+                // Points within 5 cm of the floor are floor (noise of a Kinect-like sensor at 2 m is ~1-2 cm).
+                floor_height: 0.05,
+                // Seeds: the seat under the pelvis, within a hip-breadth radius.
+                seed_radius: 0.15,
+                // A chair has a few thousand points in a view; a room-sized segment means a leak.
+                max_points: 200_000,
+            },
+        }
+    }
+}
+
+/// One detected place and how it affords the hierarchy's action.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Detection {
+    /// Hierarchy name (`sitting`).
+    pub hierarchy: String,
+    /// The agent's root joint (pelvis), world frame, metres.
+    pub position: Point3<f64>,
+    /// Heading about z, radians (0 faces +x).
+    pub yaw: f64,
+    /// The point of the seat under the agent, world frame, metres (segmentation seed).
+    pub seat: Point3<f64>,
+    /// Ids of the fine-grained affordances found, in hierarchy order.
+    pub affordances: Vec<String>,
+    /// Local score of every visited node, `(id, score)`.
+    pub local_scores: Vec<(String, f64)>,
+    /// The goal pose H_g: every joint's angle, degrees.
+    pub pose: Vec<(String, f64)>,
+    /// Accumulated score (Eq. 5).
+    pub score: f64,
+    /// Stability (Eq. 1).
+    pub stability: f64,
+    /// Availability of the hypothesis (Fig. 5d).
+    pub availability: f64,
+    /// Number of points in the segment grown from the detection.
+    pub segment_points: usize,
+}
+
+/// Everything one run over one cloud produced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outcome {
+    /// Detections after suppression, strongest first.
+    pub detections: Vec<Detection>,
+    /// Per input point, the index of the detection whose segment holds it.
+    pub labels: Vec<Option<usize>>,
+    /// Counts of the stages, for reports.
+    pub stats: Stats,
+}
+
+/// How many items each stage produced.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Stats {
+    /// Points of the cloud.
+    pub points: usize,
+    /// Occupied voxels.
+    pub voxels: usize,
+    /// Available hypotheses (section 4.1).
+    pub hypotheses: usize,
+    /// Stable fits (section 4.2).
+    pub fits: usize,
+    /// Hypotheses whose root affordance was found, before suppression.
+    pub candidates: usize,
+}
+
+/// The shared, hierarchy-independent representations of a scene.
+pub struct Prepared {
+    /// The height map (section 4.1).
+    pub map: HeightMap,
+    /// The voxelised scene.
+    pub scene: Scene,
+}
+
+/// Builds the height map and the voxelised scene once for a cloud.
+pub fn prepare(cloud: &PointCloud, cfg: &DetectConfig) -> Prepared {
+    Prepared { map: HeightMap::from_cloud(cloud, cfg.heightmap_cell), scene: Scene::new(cloud, &cfg.scene) }
+}
+
+/// The best unfolded pose at one hypothesis whose root affordance is present, with the
+/// number of stable fits tried.
+pub fn best_at(agent: &Agent, h: &Hierarchy, scene: &Scene, hyp: &Hypothesis, cfg: &DetectConfig) -> (Option<Unfolded>, usize) {
+    let fits = fit(agent, h, scene, hyp, &cfg.contact);
+    let n = fits.len();
+    let best = fits
+        .iter()
+        .map(|f| unfold(agent, h, scene, f, &cfg.contact))
+        .filter(|u| u.nodes.first().is_some_and(|r| r.found))
+        // First of equals wins: headings are tried in a fixed order.
+        .fold(None::<Unfolded>, |best, u| match best {
+            Some(b) if b.score >= u.score => Some(b),
+            _ => Some(u),
+        });
+    (best, n)
+}
+
+/// Runs the whole method on `cloud` for one agent and one hierarchy.
+pub fn detect(cloud: &PointCloud, agent: &Agent, h: &Hierarchy, cfg: &DetectConfig) -> Outcome {
+    let prepared = prepare(cloud, cfg);
+    detect_prepared(cloud, &prepared, agent, h, cfg)
+}
+
+/// Runs the method on a prepared scene (shared between hierarchies and bodies).
+pub fn detect_prepared(cloud: &PointCloud, prepared: &Prepared, agent: &Agent, h: &Hierarchy, cfg: &DetectConfig) -> Outcome {
+    let hyps = hypotheses(&prepared.map, &h.hypothesis, h.orientation, agent.height);
+    let results: Vec<(Option<Unfolded>, usize)> =
+        hyps.par_iter().map(|hyp| best_at(agent, h, &prepared.scene, hyp, cfg)).collect();
+    let fits = results.iter().map(|r| r.1).sum();
+    let candidates: Vec<(usize, Unfolded)> =
+        results.into_iter().enumerate().filter_map(|(i, (u, _))| u.map(|u| (i, u))).collect();
+    let mut order: Vec<usize> = (0..candidates.len()).collect();
+    // Strongest first; ties by hypothesis order, so the result is independent of threads.
+    order.sort_by(|&a, &b| candidates[b].1.score.total_cmp(&candidates[a].1.score).then(a.cmp(&b)));
+    let centres: Vec<Point3<f64>> = candidates.iter().map(|(_, u)| u.placement.position).collect();
+    let kept = suppress(&centres, &order, h.suppression_radius * agent.height);
+    let mut detections: Vec<Detection> = kept
+        .iter()
+        .map(|&k| {
+            let (hi, u) = &candidates[k];
+            to_detection(agent, h, &hyps[*hi], u)
+        })
+        .collect();
+    let seeds: Vec<Point3<f64>> = detections.iter().map(|d| d.seat).collect();
+    let labels = segment(cloud, &seeds, &cfg.segment);
+    for l in labels.iter().flatten() {
+        detections[*l].segment_points += 1;
+    }
+    Outcome {
+        detections,
+        labels,
+        stats: Stats {
+            points: cloud.len(),
+            voxels: prepared.scene.voxel_count(),
+            hypotheses: hyps.len(),
+            fits,
+            candidates: candidates.len(),
+        },
+    }
+}
+
+fn to_detection(agent: &Agent, h: &Hierarchy, hyp: &Hypothesis, u: &Unfolded) -> Detection {
+    let mut frames = Vec::new();
+    agent.forward_kinematics(&u.placement, &u.posture, &mut frames);
+    let bottom = agent
+        .cylinders(&frames, |j| h.fit.stability_links.contains(&j))
+        .iter()
+        .map(|c| c.a.z.min(c.b.z) - c.radius)
+        .fold(f64::INFINITY, f64::min);
+    let p = u.placement.position;
+    let seat = Point3::new(p.x, p.y, if bottom.is_finite() { bottom } else { p.z });
+    Detection {
+        hierarchy: h.name.clone(),
+        position: p,
+        yaw: u.placement.yaw.rem_euclid(std::f64::consts::TAU),
+        seat,
+        affordances: h
+            .nodes
+            .iter()
+            .zip(&u.nodes)
+            .filter(|(_, o)| o.found)
+            .map(|(n, _)| n.id.clone())
+            .collect(),
+        local_scores: h
+            .nodes
+            .iter()
+            .zip(&u.nodes)
+            .filter(|(_, o)| o.visited)
+            .map(|(n, o)| (n.id.clone(), o.local))
+            .collect(),
+        pose: agent
+            .joints
+            .iter()
+            .zip(&u.posture.angles)
+            .map(|(j, a)| (j.name.clone(), a.to_degrees()))
+            .collect(),
+        score: u.score,
+        stability: u.stability,
+        availability: hyp.availability,
+        segment_points: 0,
+    }
+}

@@ -1,0 +1,368 @@
+//! The affordance hierarchy A of section 3.2: an initial pose H_A and a rooted tree of
+//! fine-grained affordances F = (J_F, E_F), each edge carrying a true/false constraint,
+//! plus the hypothesis rule (section 4.1) and the fitting and scoring parameters
+//! (sections 4.2-4.4) that the paper leaves free.
+//!
+//! Angles in the file are degrees; lengths are metres unless the key says "fraction of H".
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+use nalgebra::{Unit, Vector3};
+use serde::Deserialize;
+
+use crate::agent::{Agent, Posture};
+use crate::fuzzy::{Availability, Low, Trapezoid};
+use crate::model::{invalid, parse_toml, read_toml, ModelError};
+
+/// How the agent's heading relates to the height-gradient descent (section 4.1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Orientation {
+    /// Facing along the descent (sitting).
+    Parallel,
+    /// Lying across it (lying).
+    Orthogonal,
+}
+
+/// The hypothesis rule of section 4.1 (Fig. 5).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HypothesisRule {
+    /// Diameter of the circular torso template, fraction of H.
+    pub template_diameter: f64,
+    /// Radius of the neighbourhood whose plane fit gives the height gradient, fraction of H.
+    pub gradient_radius: f64,
+    /// Slope (m/m) below which the gradient gives no heading and every heading is tried.
+    pub flat_gradient: f64,
+    /// "Discontinuity is low": share of invalid cells under the template.
+    pub discontinuity: Low,
+    /// "Roughness is low": standard deviation of heights under the template, metres.
+    pub roughness: Low,
+    /// "Height is comfortable": mean height under the template, fractions of H;
+    /// absent to switch the height membership off.
+    #[serde(default)]
+    pub height: Option<Trapezoid>,
+    /// The availability sets used for defuzzification (Fig. 5d).
+    pub available: Availability,
+}
+
+/// Parameters of the initial agent fitting (section 4.2).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitRule {
+    /// Headings tried around the hypothesis heading, radians.
+    pub yaw_offsets: Vec<f64>,
+    /// Step of the all-round heading search used when no offset heading is free, radians.
+    pub fallback_yaw_step: f64,
+    /// Height of the pelvis bottom above the highest cell under the template at the start, metres.
+    pub start_clearance: f64,
+    /// Furthest the agent is lowered below the hypothesis height before it is given up, metres.
+    pub max_drop: f64,
+    /// sigma_d of Eq. 1, metres.
+    pub sigma_d: f64,
+    /// Stability (Eq. 1) below which a fit is discarded.
+    pub min_stability: f64,
+    /// Spacing of the samples along each stability link (Eq. 1), metres.
+    pub sample_spacing: f64,
+    /// Links whose distances to the scene make the stability score (joint indices).
+    pub stability_links: Vec<usize>,
+    /// Links left out of the collision tests of the fitting, because a node unfolds them
+    /// afterwards (joint indices).
+    pub unchecked_links: Vec<usize>,
+}
+
+/// Parameters of the scores (Eq. 3-5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScoreRule {
+    /// sigma_theta of Eq. 3, radians.
+    pub sigma_theta: f64,
+    /// epsilon of Eq. 3: the local score of a link without contact.
+    pub epsilon: f64,
+}
+
+/// One joint constraint (theta1, theta2, theta_d, axis, joint) of J_F.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sweep {
+    /// Joint index in the agent.
+    pub joint: usize,
+    /// Start angle, radians.
+    pub theta1: f64,
+    /// End angle, radians (theta1 <= theta2).
+    pub theta2: f64,
+    /// Default (preferred) angle, radians.
+    pub thetad: f64,
+    /// Axis of the rotation (parent frame, unit).
+    pub axis: Unit<Vector3<f64>>,
+}
+
+/// A fine-grained affordance F = (J_F, E_F) and its edge to its parent.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Node {
+    /// Affordance id (`sitting`, `backrest`, ...).
+    pub id: String,
+    /// Index of the parent node; `None` for the root.
+    pub parent: Option<usize>,
+    /// Constraint c on the edge from the parent: processed when the parent's contact state equals it.
+    pub when: bool,
+    /// E_F: the links (joint indices) checked for contact.
+    pub links: Vec<usize>,
+    /// J_F: the joints swept.
+    pub sweeps: Vec<Sweep>,
+}
+
+/// A whole affordance hierarchy resolved against an agent.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hierarchy {
+    /// Name of the coarse affordance (`sitting`).
+    pub name: String,
+    /// Heading relative to the gradient descent.
+    pub orientation: Orientation,
+    /// Section 4.1.
+    pub hypothesis: HypothesisRule,
+    /// Section 4.2.
+    pub fit: FitRule,
+    /// Section 4.4.
+    pub score: ScoreRule,
+    /// Radius within which weaker detections are suppressed (section 4.5), fraction of H.
+    pub suppression_radius: f64,
+    /// H_A: the initial pose.
+    pub initial: Posture,
+    /// Nodes, parents before children; node 0 is the root.
+    pub nodes: Vec<Node>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    name: String,
+    orientation: Orientation,
+    suppression_radius: f64,
+    hypothesis: HypothesisRule,
+    fit: FitFile,
+    score: ScoreFile,
+    initial_pose: BTreeMap<String, f64>,
+    node: Vec<NodeFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FitFile {
+    yaw_offsets: Vec<f64>,
+    fallback_yaw_step: f64,
+    start_clearance: f64,
+    max_drop: f64,
+    sigma_d: f64,
+    min_stability: f64,
+    sample_spacing: f64,
+    stability_links: Vec<String>,
+    #[serde(default)]
+    unchecked_links: Vec<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScoreFile {
+    sigma_theta: f64,
+    epsilon: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NodeFile {
+    id: String,
+    #[serde(default)]
+    parent: Option<String>,
+    #[serde(default = "yes")]
+    when: bool,
+    links: Vec<String>,
+    sweep: Vec<SweepFile>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SweepFile {
+    joint: String,
+    theta1: f64,
+    theta2: f64,
+    thetad: f64,
+    #[serde(default)]
+    axis: Option<[f64; 3]>,
+}
+
+impl Hierarchy {
+    /// Loads a hierarchy file and resolves its joint and link names against `agent`.
+    pub fn load(path: &Path, agent: &Agent) -> Result<Hierarchy, ModelError> {
+        let file: File = read_toml(path)?;
+        Self::resolve(file, path, agent)
+    }
+
+    /// Parses hierarchy TOML text (`path` only names the source in errors).
+    pub fn from_toml(text: &str, path: &Path, agent: &Agent) -> Result<Hierarchy, ModelError> {
+        let file: File = parse_toml(text, path)?;
+        Self::resolve(file, path, agent)
+    }
+
+    fn resolve(file: File, path: &Path, agent: &Agent) -> Result<Hierarchy, ModelError> {
+        let link = |key: String, name: &str| {
+            agent
+                .link_index(name)
+                .ok_or_else(|| invalid(path, key, format!("unknown link `{name}` (not in agent `{}`)", agent.name)))
+        };
+        let joint = |key: String, name: &str| {
+            agent
+                .joint_index(name)
+                .ok_or_else(|| invalid(path, key, format!("unknown joint `{name}` (not in agent `{}`)", agent.name)))
+        };
+        let h = &file.hypothesis;
+        for (key, v) in [
+            ("hypothesis.template_diameter", h.template_diameter),
+            ("hypothesis.gradient_radius", h.gradient_radius),
+            ("suppression_radius", file.suppression_radius),
+            ("fit.sigma_d", file.fit.sigma_d),
+            ("fit.sample_spacing", file.fit.sample_spacing),
+            ("fit.fallback_yaw_step", file.fit.fallback_yaw_step),
+            ("score.sigma_theta", file.score.sigma_theta),
+            ("score.epsilon", file.score.epsilon),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(invalid(path, key, "must be positive"));
+            }
+        }
+        let mut initial = agent.rest_posture();
+        for (name, deg) in &file.initial_pose {
+            let j = joint(format!("initial_pose.{name}"), name)?;
+            initial.angles[j] = deg.to_radians();
+        }
+        let stability_links = file
+            .fit
+            .stability_links
+            .iter()
+            .map(|n| link("fit.stability_links".into(), n))
+            .collect::<Result<Vec<_>, _>>()?;
+        let unchecked_links = file
+            .fit
+            .unchecked_links
+            .iter()
+            .map(|n| link("fit.unchecked_links".into(), n))
+            .collect::<Result<Vec<_>, _>>()?;
+        // Nodes: resolve parents, then order parents before children.
+        let ids: HashMap<&str, usize> = file.node.iter().enumerate().map(|(i, n)| (n.id.as_str(), i)).collect();
+        if ids.len() != file.node.len() {
+            return Err(invalid(path, "node.id", "duplicate node id"));
+        }
+        let roots: Vec<&NodeFile> = file.node.iter().filter(|n| n.parent.is_none()).collect();
+        if roots.len() != 1 {
+            return Err(invalid(path, "node", "exactly one node must have no parent (the root)"));
+        }
+        for n in &file.node {
+            if let Some(p) = &n.parent {
+                if !ids.contains_key(p.as_str()) {
+                    return Err(invalid(path, format!("node.{}.parent", n.id), format!("depends on a missing node `{p}`")));
+                }
+            }
+        }
+        let mut order: Vec<usize> = Vec::new();
+        let mut placed = vec![false; file.node.len()];
+        loop {
+            let before = order.len();
+            for (i, n) in file.node.iter().enumerate() {
+                let ready = n.parent.as_ref().is_none_or(|p| placed[ids[p.as_str()]]);
+                if !placed[i] && ready {
+                    placed[i] = true;
+                    order.push(i);
+                }
+            }
+            if order.len() == file.node.len() {
+                break;
+            }
+            if order.len() == before {
+                let stuck = placed.iter().position(|p| !p).unwrap_or(0);
+                return Err(invalid(path, format!("node.{}.parent", file.node[stuck].id), "the nodes form a cycle"));
+            }
+        }
+        let new_index: HashMap<usize, usize> = order.iter().enumerate().map(|(new, &old)| (old, new)).collect();
+        let mut nodes = Vec::with_capacity(order.len());
+        for &i in &order {
+            let n = &file.node[i];
+            let key = |k: &str| format!("node.{}.{k}", n.id);
+            let links = n.links.iter().map(|l| link(key("links"), l)).collect::<Result<Vec<_>, _>>()?;
+            if links.is_empty() {
+                return Err(invalid(path, key("links"), "a node needs at least one link to check"));
+            }
+            let mut sweeps = Vec::new();
+            for s in &n.sweep {
+                let j = joint(key("sweep.joint"), &s.joint)?;
+                if !(s.theta1.is_finite() && s.theta2.is_finite() && s.thetad.is_finite()) {
+                    return Err(invalid(path, key("sweep"), "angles must be finite"));
+                }
+                if s.theta1 > s.theta2 {
+                    return Err(invalid(
+                        path,
+                        key(&format!("sweep.{}.theta1", s.joint)),
+                        format!("theta1 = {} exceeds theta2 = {}", s.theta1, s.theta2),
+                    ));
+                }
+                let axis = match s.axis {
+                    None => agent.joints[j].axis,
+                    Some(a) => {
+                        let v = Vector3::from(a);
+                        if !(v.norm() > 1e-9) {
+                            return Err(invalid(path, key(&format!("sweep.{}.axis", s.joint)), "must be a non-zero vector"));
+                        }
+                        Unit::new_normalize(v)
+                    }
+                };
+                sweeps.push(Sweep {
+                    joint: j,
+                    theta1: s.theta1.to_radians(),
+                    theta2: s.theta2.to_radians(),
+                    thetad: s.thetad.to_radians(),
+                    axis,
+                });
+            }
+            if sweeps.is_empty() {
+                return Err(invalid(path, key("sweep"), "a node needs at least one joint sweep"));
+            }
+            nodes.push(Node {
+                id: n.id.clone(),
+                parent: n.parent.as_ref().map(|p| new_index[&ids[p.as_str()]]),
+                when: n.when,
+                links,
+                sweeps,
+            });
+        }
+        let f = &file.fit;
+        Ok(Hierarchy {
+            name: file.name,
+            orientation: file.orientation,
+            hypothesis: file.hypothesis,
+            fit: FitRule {
+                yaw_offsets: f.yaw_offsets.iter().map(|d| d.to_radians()).collect(),
+                fallback_yaw_step: f.fallback_yaw_step.to_radians(),
+                start_clearance: f.start_clearance,
+                max_drop: f.max_drop,
+                sigma_d: f.sigma_d,
+                min_stability: f.min_stability,
+                sample_spacing: f.sample_spacing,
+                stability_links,
+                unchecked_links,
+            },
+            score: ScoreRule {
+                sigma_theta: file.score.sigma_theta.to_radians(),
+                epsilon: file.score.epsilon,
+            },
+            suppression_radius: file.suppression_radius,
+            initial,
+            nodes,
+        })
+    }
+
+    /// The affordance ids, in node order (root first).
+    pub fn ids(&self) -> Vec<&str> {
+        self.nodes.iter().map(|n| n.id.as_str()).collect()
+    }
+}

@@ -1,0 +1,402 @@
+//! The scene the agent is fitted into (section 4.2): the point cloud voxelised into a
+//! parry3d `Voxels` shape for exact collision tests, a Euclidean distance field over the
+//! same voxels that bounds how far a body part is from anything (so exact tests are only
+//! made where contact is near), and the floor, the half-space z <= 0 (paper section 3.1:
+//! agent and scene share the ground plane).
+//!
+//! World frame: metres, z up. Parry works in f32 in a local frame re-centred on the cloud.
+
+use nalgebra::{Point3, Vector3};
+use parry3d::math::{IVector, Pose, Rotation, Vector};
+use parry3d::shape::{Cylinder as ParryCylinder, Voxels};
+
+use crate::agent::Cylinder;
+use crate::cloud::PointCloud;
+
+/// How the scene is built.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SceneConfig {
+    /// Voxel edge length, metres.
+    pub voxel_size: f64,
+    /// Whether the floor z <= 0 is solid even where the cloud has no floor points.
+    pub floor: bool,
+    /// Free border around the voxels over which the distance field is kept, metres.
+    pub field_margin: f64,
+}
+
+/// Voxelised scene with a distance field and an optional solid floor.
+#[derive(Debug)]
+pub struct Scene {
+    voxel: f64,
+    /// World position of the local origin used for f32 geometry.
+    origin: Vector3<f64>,
+    voxels: Option<Voxels>,
+    field: Option<DistanceField>,
+    floor: bool,
+    /// World bounds of the occupied voxels (cube extents included).
+    occupied: Option<(Point3<f64>, Point3<f64>)>,
+    count: usize,
+}
+
+/// Euclidean distances from cell centres to the nearest occupied voxel centre.
+#[derive(Debug)]
+struct DistanceField {
+    /// Grid index of cell (0, 0, 0).
+    min: [i64; 3],
+    dims: [usize; 3],
+    dist: Vec<f32>,
+}
+
+impl Scene {
+    /// Voxelises `cloud` (world frame, metres).
+    pub fn new(cloud: &PointCloud, cfg: &SceneConfig) -> Scene {
+        let v = cfg.voxel_size;
+        let origin = cloud
+            .bounds()
+            .map_or(Vector3::zeros(), |(lo, hi)| ((lo.coords + hi.coords) / 2.0).map(|c| (c / v).round() * v));
+        let mut keys: Vec<[i64; 3]> = cloud
+            .points
+            .iter()
+            .map(|p| {
+                let l = (p.coords - origin) / v;
+                [l.x.floor() as i64, l.y.floor() as i64, l.z.floor() as i64]
+            })
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        if keys.is_empty() {
+            return Scene { voxel: v, origin, voxels: None, field: None, floor: cfg.floor, occupied: None, count: 0 };
+        }
+        let mut lo = keys[0];
+        let mut hi = keys[0];
+        for k in &keys {
+            for a in 0..3 {
+                lo[a] = lo[a].min(k[a]);
+                hi[a] = hi[a].max(k[a]);
+            }
+        }
+        let ivs: Vec<IVector> = keys.iter().map(|k| IVector::new(k[0] as i32, k[1] as i32, k[2] as i32)).collect();
+        let voxels = Voxels::new(Vector::splat(v as f32), &ivs);
+        let margin = (cfg.field_margin / v).ceil() as i64;
+        let fmin = [lo[0] - margin, lo[1] - margin, lo[2] - margin];
+        let dims = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1 + 2 * margin) as usize);
+        let field = DistanceField::new(fmin, dims, &keys, v);
+        let world = |k: [i64; 3]| Point3::new(k[0] as f64 * v, k[1] as f64 * v, k[2] as f64 * v) + origin;
+        let occupied = Some((world(lo), world([hi[0] + 1, hi[1] + 1, hi[2] + 1])));
+        Scene { voxel: v, origin, voxels: Some(voxels), field: Some(field), floor: cfg.floor, occupied, count: keys.len() }
+    }
+
+    /// Number of occupied voxels.
+    pub fn voxel_count(&self) -> usize {
+        self.count
+    }
+
+    /// Voxel edge length, metres.
+    pub fn voxel_size(&self) -> f64 {
+        self.voxel
+    }
+
+    /// A lower bound on the distance (metres) from point `p` (world) to the surface of any
+    /// occupied voxel; may be negative when `p` is close to or inside one.
+    pub fn point_clearance(&self, p: &Point3<f64>) -> f64 {
+        let (Some(field), Some((lo, hi))) = (&self.field, &self.occupied) else {
+            return f64::INFINITY;
+        };
+        let v = self.voxel;
+        let half_diag = v * 3f64.sqrt() / 2.0;
+        let l = (p.coords - self.origin) / v;
+        let k = [l.x.floor() as i64, l.y.floor() as i64, l.z.floor() as i64];
+        match field.get(k) {
+            // Quantising p to its cell centre costs half a diagonal; the voxel's extent another.
+            Some(d) => d as f64 - 2.0 * half_diag,
+            None => {
+                let dx = (lo.x - p.x).max(p.x - hi.x).max(0.0);
+                let dy = (lo.y - p.y).max(p.y - hi.y).max(0.0);
+                let dz = (lo.z - p.z).max(p.z - hi.z).max(0.0);
+                (dx * dx + dy * dy + dz * dz).sqrt()
+            }
+        }
+    }
+
+    /// A lower bound on the gap (metres) between the body part `c` and the scene (voxels and
+    /// floor); positive means certainly free, zero or negative means contact is possible.
+    pub fn clearance(&self, c: &Cylinder) -> f64 {
+        let floor = if self.floor { floor_gap(c) } else { f64::INFINITY };
+        if self.field.is_none() {
+            return floor;
+        }
+        let axis = c.b - c.a;
+        let len = axis.norm();
+        let n = (len / self.voxel).ceil().max(1.0) as usize;
+        let spacing = len / n as f64;
+        let mut best = f64::INFINITY;
+        for i in 0..=n {
+            let p = c.a + axis * (i as f64 / n as f64);
+            best = best.min(self.point_clearance(&p));
+        }
+        (best - spacing / 2.0 - c.radius).min(floor)
+    }
+
+    /// Exact test: does the body part `c` intersect an occupied voxel or the floor?
+    /// (parry3d `intersection_test` of a cylinder against the `Voxels` shape.)
+    pub fn intersects(&self, c: &Cylinder) -> bool {
+        if self.floor && floor_gap(c) < 0.0 {
+            return true;
+        }
+        let Some(voxels) = &self.voxels else {
+            return false;
+        };
+        let axis = c.b - c.a;
+        let len = axis.norm();
+        if len < 1e-9 {
+            return false;
+        }
+        let mid = nalgebra::center(&c.a, &c.b).coords - self.origin;
+        let dir = axis / len;
+        let rot = Rotation::from_rotation_arc(Vector::Y, Vector::new(dir.x as f32, dir.y as f32, dir.z as f32));
+        let pose = Pose::from_parts(Vector::new(mid.x as f32, mid.y as f32, mid.z as f32), rot);
+        let shape = ParryCylinder::new((len / 2.0) as f32, c.radius as f32);
+        parry3d::query::intersection_test(&Pose::IDENTITY, voxels, &pose, &shape)
+            .map(|r| r.intersecting)
+            .unwrap_or(false)
+    }
+
+    /// Distance (metres, >= 0) from the surface of a body part of radius `radius` whose axis
+    /// passes through `p` to the nearest voxel or the floor: the d_i of Eq. 1.
+    pub fn surface_distance(&self, p: &Point3<f64>, radius: f64) -> f64 {
+        let floor = if self.floor { p.z - radius } else { f64::INFINITY };
+        // The field holds centre distances: take back the quantisation slack for a
+        // central estimate, and the half voxel to reach the voxel's face.
+        let d = match (&self.field, self.occupied) {
+            (Some(f), Some(_)) => {
+                let l = (p.coords - self.origin) / self.voxel;
+                match f.get([l.x.floor() as i64, l.y.floor() as i64, l.z.floor() as i64]) {
+                    Some(d) => d as f64 - self.voxel / 2.0 - radius,
+                    None => self.point_clearance(p) - radius,
+                }
+            }
+            _ => f64::INFINITY,
+        };
+        d.min(floor).max(0.0)
+    }
+}
+
+impl Scene {
+    /// The first parameter `t` in [0, 1] at which a moving set of body parts touches the
+    /// scene, or `None` if it stays free. `motion(t, out)` writes the posed parts at `t`;
+    /// `speed` bounds how far (metres) any point of them moves per unit of `t`; contact is
+    /// located to within `resolution` metres of motion.
+    ///
+    /// Free space is crossed in steps as long as the distance field's clearance allows
+    /// (conservative advancement); exact parry3d tests are made only for parts whose
+    /// clearance bound is not positive, and the contact is refined by bisection.
+    pub fn first_contact(&self, mut motion: impl FnMut(f64, &mut Vec<Cylinder>), speed: f64, resolution: f64) -> Option<f64> {
+        let mut parts = Vec::new();
+        let min_step = if speed > 0.0 { resolution / speed } else { 1.0 };
+        let mut touching = |t: f64, parts: &mut Vec<Cylinder>| -> (bool, f64) {
+            motion(t, parts);
+            let mut gap = f64::INFINITY;
+            let mut hit = false;
+            for c in parts.iter() {
+                let g = self.clearance(c);
+                gap = gap.min(g);
+                if g <= 0.0 && !hit && self.intersects(c) {
+                    hit = true;
+                }
+            }
+            (hit, gap)
+        };
+        let (mut free, mut t) = (None::<f64>, 0.0f64);
+        loop {
+            let (hit, gap) = touching(t, &mut parts);
+            if hit {
+                let Some(mut lo) = free else {
+                    return Some(t);
+                };
+                let mut hi = t;
+                while (hi - lo) * speed > resolution / 4.0 {
+                    let mid = 0.5 * (lo + hi);
+                    if touching(mid, &mut parts).0 {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                }
+                return Some(hi);
+            }
+            free = Some(t);
+            if t >= 1.0 {
+                return None;
+            }
+            let step = if gap > 0.0 && speed > 0.0 { (gap / speed).max(min_step) } else { min_step };
+            t = (t + step).min(1.0);
+        }
+    }
+}
+
+/// Height of the lowest point of a cylinder above z = 0, metres (negative below the floor).
+fn floor_gap(c: &Cylinder) -> f64 {
+    let axis = c.b - c.a;
+    let len = axis.norm();
+    let sin = if len > 1e-12 { (1.0 - (axis.z / len).powi(2)).max(0.0).sqrt() } else { 1.0 };
+    c.a.z.min(c.b.z) - c.radius * sin
+}
+
+impl DistanceField {
+    /// Exact Euclidean distance transform (Felzenszwalb and Huttenlocher, 2012) of the
+    /// occupied voxel `keys`, in metres.
+    fn new(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]], v: f64) -> DistanceField {
+        const FAR: f32 = 1e20;
+        let [nx, ny, nz] = dims;
+        let mut d = vec![FAR; nx * ny * nz];
+        for k in keys {
+            let (x, y, z) = ((k[0] - min[0]) as usize, (k[1] - min[1]) as usize, (k[2] - min[2]) as usize);
+            d[(z * ny + y) * nx + x] = 0.0;
+        }
+        let longest = nx.max(ny).max(nz);
+        let mut f = vec![0f32; longest];
+        let mut out = vec![0f32; longest];
+        let mut vs = vec![0usize; longest];
+        let mut zs = vec![0f32; longest + 1];
+        // Along x, y, then z: squared distances in cells.
+        let strides = [1, nx, nx * ny];
+        for axis in 0..3 {
+            let n = dims[axis];
+            let stride = strides[axis];
+            let others: Vec<usize> = (0..nx * ny * nz).filter(|&i| (i / stride) % n == 0).collect();
+            for start in others {
+                for i in 0..n {
+                    f[i] = d[start + i * stride];
+                }
+                edt_1d(&f[..n], &mut out[..n], &mut vs, &mut zs);
+                for i in 0..n {
+                    d[start + i * stride] = out[i];
+                }
+            }
+        }
+        for x in d.iter_mut() {
+            *x = if *x >= FAR / 2.0 { f32::INFINITY } else { x.sqrt() * v as f32 };
+        }
+        DistanceField { min, dims, dist: d }
+    }
+
+    fn get(&self, k: [i64; 3]) -> Option<f32> {
+        let mut idx = [0usize; 3];
+        for a in 0..3 {
+            let i = k[a] - self.min[a];
+            if i < 0 || i as usize >= self.dims[a] {
+                return None;
+            }
+            idx[a] = i as usize;
+        }
+        Some(self.dist[(idx[2] * self.dims[1] + idx[1]) * self.dims[0] + idx[0]])
+    }
+}
+
+/// One-dimensional squared distance transform of sampled function `f` (lower envelope of parabolas).
+fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
+    let n = f.len();
+    let mut k = 0usize;
+    v[0] = 0;
+    z[0] = f32::NEG_INFINITY;
+    z[1] = f32::INFINITY;
+    for q in 1..n {
+        loop {
+            let p = v[k];
+            let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32)) / (2.0 * q as f32 - 2.0 * p as f32);
+            if s <= z[k] && k > 0 {
+                k -= 1;
+            } else if s <= z[k] {
+                // k == 0 and the new parabola dominates from -inf: replace.
+                v[0] = q;
+                z[0] = f32::NEG_INFINITY;
+                z[1] = f32::INFINITY;
+                break;
+            } else {
+                k += 1;
+                v[k] = q;
+                z[k] = s;
+                z[k + 1] = f32::INFINITY;
+                break;
+            }
+        }
+    }
+    k = 0;
+    for (q, dq) in d.iter_mut().enumerate().take(n) {
+        while z[k + 1] < q as f32 {
+            k += 1;
+        }
+        let p = v[k];
+        let diff = q as f32 - p as f32;
+        *dq = diff * diff + f[p];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cfg(floor: bool) -> SceneConfig {
+        SceneConfig { voxel_size: 0.02, floor, field_margin: 0.2 }
+    }
+
+    fn slab(z: f64) -> PointCloud {
+        // A 0.6 x 0.6 m horizontal slab of points at height z, 1 cm apart.
+        let mut pts = Vec::new();
+        for i in 0..60 {
+            for j in 0..60 {
+                pts.push(Point3::new(i as f64 * 0.01, j as f64 * 0.01, z));
+            }
+        }
+        PointCloud::new(pts)
+    }
+
+    fn vertical(x: f64, y: f64, bottom: f64, top: f64, r: f64) -> Cylinder {
+        Cylinder { joint: 0, a: Point3::new(x, y, bottom), b: Point3::new(x, y, top), radius: r }
+    }
+
+    #[test]
+    fn one_dimensional_transform_matches_brute_force() {
+        let f: Vec<f32> = vec![1e20, 0.0, 1e20, 1e20, 1e20, 4.0, 1e20, 0.0, 1e20];
+        let mut d = vec![0.0; f.len()];
+        let (mut v, mut z) = (vec![0; f.len()], vec![0.0; f.len() + 1]);
+        edt_1d(&f, &mut d, &mut v, &mut z);
+        for q in 0..f.len() {
+            let brute = (0..f.len()).map(|p| (q as f32 - p as f32).powi(2) + f[p]).fold(f32::INFINITY, f32::min);
+            assert_eq!(d[q], brute, "at {q}");
+        }
+    }
+
+    #[test]
+    fn clearance_is_a_lower_bound_and_tight_far_away() {
+        let s = Scene::new(&slab(0.45), &cfg(false));
+        // A ball-like short cylinder 0.2 m above the slab: the true gap is about 0.2 - r.
+        let c = vertical(0.3, 0.3, 0.65, 0.66, 0.05);
+        let gap = s.clearance(&c);
+        assert!(gap <= 0.15 + 1e-9, "lower bound: {gap}");
+        assert!(gap > 0.15 - 0.06, "not too loose: {gap}");
+        assert!(!s.intersects(&c));
+    }
+
+    #[test]
+    fn exact_test_finds_contact_with_the_slab_and_the_floor() {
+        let s = Scene::new(&slab(0.45), &cfg(true));
+        // The slab's voxels span z in [0.44, 0.46]: a cylinder reaching down to 0.455 touches.
+        assert!(s.intersects(&vertical(0.3, 0.3, 0.455, 0.7, 0.05)));
+        assert!(!s.intersects(&vertical(0.3, 0.3, 0.47, 0.7, 0.05)));
+        // Off the slab, only the floor: a leg ending 1 cm above it is free, 1 cm below is not.
+        assert!(!s.intersects(&vertical(1.5, 1.5, 0.01, 0.4, 0.03)));
+        assert!(s.intersects(&vertical(1.5, 1.5, -0.01, 0.4, 0.03)));
+        let lying = Cylinder { joint: 0, a: Point3::new(2.0, 2.0, 0.04), b: Point3::new(2.5, 2.0, 0.04), radius: 0.05 };
+        assert!(s.intersects(&lying));
+        assert!((s.clearance(&lying) + 0.01).abs() < 1e-9);
+    }
+
+    #[test]
+    fn empty_scene_is_free_but_for_the_floor() {
+        let s = Scene::new(&PointCloud::default(), &cfg(true));
+        assert!(!s.intersects(&vertical(0.0, 0.0, 0.1, 0.5, 0.05)));
+        assert!((s.clearance(&vertical(0.0, 0.0, 0.1, 0.5, 0.05)) - 0.1).abs() < 1e-9);
+        assert!((s.surface_distance(&Point3::new(0.0, 0.0, 0.3), 0.1) - 0.2).abs() < 1e-9);
+    }
+}

@@ -1,0 +1,197 @@
+//! Unfolding the agent model (section 4.3) and combining the evidence (section 4.4).
+//!
+//! The hierarchy is walked from its root. At each node F the joints J_F are set to
+//! theta1 and turned towards theta2 while the links E_F are checked for contact; the joint
+//! stops at the contact angle theta_c, or takes theta_d when nothing was touched (Eq. 2).
+//! A node's children are visited when their edge constraint equals the node's outcome.
+//!
+//! J_F is split into kinematic branches, sets of sweeps that move the same links (the left
+//! and right leg are two branches); each branch stops at its own contact, and each branch
+//! is one "edge" of Eq. 3-4: its local score is exp(-(theta_d - theta_c)^2 / 2 sigma^2)
+//! (the squared differences averaged over its joints) on contact, epsilon otherwise.
+
+use crate::agent::{Agent, Cylinder, Placement, Posture};
+use crate::fit::{ContactConfig, Fit};
+use crate::hierarchy::{Hierarchy, Node};
+use crate::scene::Scene;
+
+/// The outcome of one node.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NodeOutcome {
+    /// Whether the node was processed (its edge constraint matched).
+    pub visited: bool,
+    /// Whether a contact occurred: the fine-grained affordance is present.
+    pub found: bool,
+    /// Local score (Eq. 3 combined by the T-norm of Eq. 4); 0 when not visited.
+    pub local: f64,
+}
+
+/// The agent after unfolding: the goal configuration H_g and what it found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Unfolded {
+    /// Where the agent is.
+    pub placement: Placement,
+    /// The goal posture H_g.
+    pub posture: Posture,
+    /// One outcome per hierarchy node, in node order.
+    pub nodes: Vec<NodeOutcome>,
+    /// Accumulated score (T-conorm of Eq. 5 over the found nodes' local scores).
+    pub score: f64,
+    /// Stability of the fit (Eq. 1).
+    pub stability: f64,
+}
+
+/// The T-norm of Eq. 4.
+pub fn t_norm(r: f64, q: f64) -> f64 {
+    r * q
+}
+
+/// The T-conorm of Eq. 5.
+pub fn t_conorm(r: f64, q: f64) -> f64 {
+    r + q - r * q
+}
+
+/// The local score of Eq. 3 for one edge: `Some(squared angle error)` on contact.
+pub fn local_score(sq_error: Option<f64>, sigma_theta: f64, epsilon: f64) -> f64 {
+    match sq_error {
+        Some(e2) => (-e2 / (2.0 * sigma_theta * sigma_theta)).exp(),
+        None => epsilon,
+    }
+}
+
+/// Unfolds the hierarchy from a fit (sections 4.3 and 4.4).
+pub fn unfold(agent: &Agent, h: &Hierarchy, scene: &Scene, fit: &Fit, contact: &ContactConfig) -> Unfolded {
+    let mut posture = fit.posture.clone();
+    let mut nodes: Vec<NodeOutcome> = Vec::with_capacity(h.nodes.len());
+    let mut score = 0.0;
+    for node in &h.nodes {
+        let visited = match node.parent {
+            None => true,
+            Some(p) => nodes[p].visited && nodes[p].found == node.when,
+        };
+        if !visited {
+            nodes.push(NodeOutcome { visited: false, found: false, local: 0.0 });
+            continue;
+        }
+        let (found, local) = unfold_node(agent, h, scene, &fit.placement, &mut posture, node, contact);
+        if found {
+            score = t_conorm(score, local);
+        }
+        nodes.push(NodeOutcome { visited: true, found, local });
+    }
+    Unfolded { placement: fit.placement, posture, nodes, score, stability: fit.stability }
+}
+
+/// Sweeps one node's joints, writing the resulting angles (Eq. 2) into `posture`;
+/// returns whether it touched and its local score.
+fn unfold_node(
+    agent: &Agent,
+    h: &Hierarchy,
+    scene: &Scene,
+    place: &Placement,
+    posture: &mut Posture,
+    node: &Node,
+    contact: &ContactConfig,
+) -> (bool, f64) {
+    for s in &node.sweeps {
+        posture.angles[s.joint] = s.theta1;
+        posture.axes[s.joint] = s.axis;
+    }
+    let mut local = 1.0;
+    let mut found = false;
+    for branch in branches(agent, node) {
+        let links: Vec<usize> = node
+            .links
+            .iter()
+            .copied()
+            .filter(|&l| branch.iter().any(|&s| agent.is_descendant(l, node.sweeps[s].joint)))
+            .collect();
+        let speed: f64 = branch
+            .iter()
+            .map(|&s| {
+                let sw = &node.sweeps[s];
+                (sw.theta2 - sw.theta1) * agent.reach(sw.joint)
+            })
+            .sum();
+        let base = posture.clone();
+        let mut frames = Vec::new();
+        let mut motion = |t: f64, out: &mut Vec<Cylinder>| {
+            let mut p = base.clone();
+            for &s in &branch {
+                let sw = &node.sweeps[s];
+                p.angles[sw.joint] = sw.theta1 + t * (sw.theta2 - sw.theta1);
+            }
+            agent.forward_kinematics(place, &p, &mut frames);
+            *out = agent.cylinders(&frames, |j| links.contains(&j));
+        };
+        let hit = scene.first_contact(&mut motion, speed.max(1e-9), contact.resolution);
+        let mut sq = 0.0;
+        for &s in &branch {
+            let sw = &node.sweeps[s];
+            // Eq. 2: theta_c on contact, theta_d otherwise.
+            let theta = match hit {
+                Some(t) => sw.theta1 + t * (sw.theta2 - sw.theta1),
+                None => sw.thetad,
+            };
+            posture.angles[sw.joint] = theta;
+            sq += (sw.thetad - theta).powi(2);
+        }
+        let sq = sq / branch.len() as f64;
+        found |= hit.is_some();
+        local = t_norm(local, local_score(hit.map(|_| sq), h.score.sigma_theta, h.score.epsilon));
+    }
+    (found, local)
+}
+
+/// Groups a node's sweeps (by index) into kinematic branches: sweeps that move a common
+/// link of E_F, transitively, belong to one branch. Ordered by first sweep.
+pub fn branches(agent: &Agent, node: &Node) -> Vec<Vec<usize>> {
+    let n = node.sweeps.len();
+    let moves: Vec<Vec<usize>> = node
+        .sweeps
+        .iter()
+        .map(|s| node.links.iter().copied().filter(|&l| agent.is_descendant(l, s.joint)).collect())
+        .collect();
+    let mut group: Vec<usize> = (0..n).collect();
+    for i in 0..n {
+        for j in 0..i {
+            if moves[i].iter().any(|l| moves[j].contains(l)) {
+                let (gi, gj) = (group[i], group[j]);
+                for g in group.iter_mut() {
+                    if *g == gi {
+                        *g = gj;
+                    }
+                }
+            }
+        }
+    }
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    let mut keys: Vec<usize> = Vec::new();
+    for (i, g) in group.iter().enumerate() {
+        match keys.iter().position(|k| k == g) {
+            Some(p) => out[p].push(i),
+            None => {
+                keys.push(*g);
+                out.push(vec![i]);
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn norms_and_local_score() {
+        assert_eq!(t_norm(0.5, 0.4), 0.2);
+        assert!((t_conorm(0.5, 0.4) - 0.7).abs() < 1e-12);
+        assert_eq!(t_conorm(0.0, 0.3), 0.3);
+        let s = 20f64.to_radians();
+        assert_eq!(local_score(Some(0.0), s, 0.1), 1.0);
+        // One sigma off: exp(-1/2).
+        assert!((local_score(Some(s * s), s, 0.1) - (-0.5f64).exp()).abs() < 1e-12);
+        assert_eq!(local_score(None, s, 0.1), 0.1);
+    }
+}
