@@ -1,1 +1,2 @@
-fn main(){}
+//! Benchmarks of the pipeline stages (filled in below).
+fn main() {}

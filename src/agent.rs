@@ -150,7 +150,11 @@ impl Agent {
         let mut link_names = std::collections::HashSet::new();
         for j in &file.joint {
             if !names.insert(j.name.as_str()) {
-                return Err(invalid(path, format!("joint.{}", j.name), "duplicate joint name"));
+                return Err(invalid(
+                    path,
+                    format!("joint.{}", j.name),
+                    "duplicate joint name",
+                ));
             }
             if let Some(p) = &j.parent {
                 if !file.joint.iter().any(|k| &k.name == p) {
@@ -163,12 +167,20 @@ impl Agent {
             }
             if let Some(l) = &j.link {
                 if !link_names.insert(l.name.as_str()) {
-                    return Err(invalid(path, format!("joint.{}.link.name", j.name), "duplicate link name"));
+                    return Err(invalid(
+                        path,
+                        format!("joint.{}.link.name", j.name),
+                        "duplicate link name",
+                    ));
                 }
             }
         }
         if file.joint.iter().filter(|j| j.parent.is_none()).count() != 1 {
-            return Err(invalid(path, "joint", "exactly one joint must have no parent (the root)"));
+            return Err(invalid(
+                path,
+                "joint",
+                "exactly one joint must have no parent (the root)",
+            ));
         }
         while !pending.is_empty() {
             let before = pending.len();
@@ -204,7 +216,12 @@ impl Agent {
         })
     }
 
-    fn joint(j: &JointFile, parent: Option<usize>, path: &Path, h: f64) -> Result<Joint, ModelError> {
+    fn joint(
+        j: &JointFile,
+        parent: Option<usize>,
+        path: &Path,
+        h: f64,
+    ) -> Result<Joint, ModelError> {
         let key = |k: &str| format!("joint.{}.{k}", j.name);
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         if !finite(&j.origin) {
@@ -214,7 +231,9 @@ impl Agent {
         if !finite(&j.axis) || axis.norm() < 1e-9 {
             return Err(invalid(path, key("axis"), "must be a non-zero vector"));
         }
-        if !(j.limit.lower.is_finite() && j.limit.upper.is_finite()) || j.limit.lower > j.limit.upper {
+        if !(j.limit.lower.is_finite() && j.limit.upper.is_finite())
+            || j.limit.lower > j.limit.upper
+        {
             return Err(invalid(path, key("limit"), "lower must not exceed upper"));
         }
         let link = match &j.link {
@@ -222,7 +241,11 @@ impl Agent {
             Some(l) => {
                 let (from, to) = (Point3::from(l.from) * h, Point3::from(l.to) * h);
                 if !finite(&l.from) || !finite(&l.to) || (to - from).norm() < 1e-6 {
-                    return Err(invalid(path, key("link"), format!("link `{}` has zero length", l.name)));
+                    return Err(invalid(
+                        path,
+                        key("link"),
+                        format!("link `{}` has zero length", l.name),
+                    ));
                 }
                 if !(l.radius.is_finite() && l.radius > 0.0) {
                     return Err(invalid(path, key("link.radius"), "must be positive"));
@@ -279,7 +302,12 @@ impl Agent {
 
     /// Forward kinematics: the world frame of every joint for a placement and posture,
     /// written into `frames` (resized to the number of joints).
-    pub fn forward_kinematics(&self, place: &Placement, posture: &Posture, frames: &mut Vec<Isometry3<f64>>) {
+    pub fn forward_kinematics(
+        &self,
+        place: &Placement,
+        posture: &Posture,
+        frames: &mut Vec<Isometry3<f64>>,
+    ) {
         frames.clear();
         let base = Isometry3::from_parts(
             Translation3::from(place.position.coords),
@@ -296,7 +324,11 @@ impl Agent {
     }
 
     /// The posed body parts (world frame) of the joints selected by `which`.
-    pub fn cylinders(&self, frames: &[Isometry3<f64>], which: impl Fn(usize) -> bool) -> Vec<Cylinder> {
+    pub fn cylinders(
+        &self,
+        frames: &[Isometry3<f64>],
+        which: impl Fn(usize) -> bool,
+    ) -> Vec<Cylinder> {
         self.joints
             .iter()
             .enumerate()
@@ -316,10 +348,9 @@ impl Agent {
     /// origin, in any posture: bounds how far a rotation of `j` by one radian moves its parts.
     pub fn reach(&self, j: usize) -> f64 {
         fn depth(agent: &Agent, j: usize) -> f64 {
-            let own = agent.joints[j]
-                .link
-                .as_ref()
-                .map_or(0.0, |l| l.from.coords.norm().max(l.to.coords.norm()) + l.radius);
+            let own = agent.joints[j].link.as_ref().map_or(0.0, |l| {
+                l.from.coords.norm().max(l.to.coords.norm()) + l.radius
+            });
             let kids = agent
                 .joints
                 .iter()
@@ -373,16 +404,34 @@ link = { name = "shank", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius 
         let mut p = a.rest_posture();
         p.angles = vec![90f64.to_radians(), 90f64.to_radians()];
         let mut f = Vec::new();
-        let place = Placement { position: Point3::new(1.0, 2.0, 0.0), yaw: 0.0 };
+        let place = Placement {
+            position: Point3::new(1.0, 2.0, 0.0),
+            yaw: 0.0,
+        };
         a.forward_kinematics(&place, &p, &mut f);
         let c = a.cylinders(&f, |_| true);
-        assert!((c[0].b - Point3::new(1.5, 2.0, 1.0)).norm() < 1e-9, "knee at {:?}", c[0].b);
-        assert!((c[1].b - Point3::new(1.5, 2.0, 0.5)).norm() < 1e-9, "ankle at {:?}", c[1].b);
+        assert!(
+            (c[0].b - Point3::new(1.5, 2.0, 1.0)).norm() < 1e-9,
+            "knee at {:?}",
+            c[0].b
+        );
+        assert!(
+            (c[1].b - Point3::new(1.5, 2.0, 0.5)).norm() < 1e-9,
+            "ankle at {:?}",
+            c[1].b
+        );
         // Turning the agent by 90 deg about z makes it face +y.
-        let place = Placement { yaw: 90f64.to_radians(), ..place };
+        let place = Placement {
+            yaw: 90f64.to_radians(),
+            ..place
+        };
         a.forward_kinematics(&place, &p, &mut f);
         let c = a.cylinders(&f, |_| true);
-        assert!((c[0].b - Point3::new(1.0, 2.5, 1.0)).norm() < 1e-9, "knee at {:?}", c[0].b);
+        assert!(
+            (c[0].b - Point3::new(1.0, 2.5, 1.0)).norm() < 1e-9,
+            "knee at {:?}",
+            c[0].b
+        );
     }
 
     #[test]
@@ -396,16 +445,33 @@ link = { name = "shank", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius 
     #[test]
     fn rejects_unknown_parent_cycle_and_zero_links() {
         let bad = TWO_LINKS.replace("parent = \"hip\"", "parent = \"hips\"");
-        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75).unwrap_err().to_string();
+        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("joint.knee.parent") && e.contains("hips"), "{e}");
-        let bad = TWO_LINKS.replace("to = [0.0, 0.0, -0.25], radius = 0.03", "to = [0.0, 0.0, 0.0], radius = 0.03");
-        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75).unwrap_err().to_string();
+        let bad = TWO_LINKS.replace(
+            "to = [0.0, 0.0, -0.25], radius = 0.03",
+            "to = [0.0, 0.0, 0.0], radius = 0.03",
+        );
+        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("zero length"), "{e}");
-        let bad = TWO_LINKS.replace("name = \"hip\"\norigin", "name = \"hip\"\nparent = \"knee\"\norigin");
-        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75).unwrap_err().to_string();
+        let bad = TWO_LINKS.replace(
+            "name = \"hip\"\norigin",
+            "name = \"hip\"\nparent = \"knee\"\norigin",
+        );
+        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("root") || e.contains("cycle"), "{e}");
-        let bad = TWO_LINKS.replace("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 1.0, 0.0]\ncolour = 3");
-        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75).unwrap_err().to_string();
+        let bad = TWO_LINKS.replace(
+            "axis = [0.0, 1.0, 0.0]",
+            "axis = [0.0, 1.0, 0.0]\ncolour = 3",
+        );
+        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("x.toml:") && e.contains("colour"), "{e}");
     }
 }

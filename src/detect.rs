@@ -119,12 +119,21 @@ pub struct Prepared {
 
 /// Builds the height map and the voxelised scene once for a cloud.
 pub fn prepare(cloud: &PointCloud, cfg: &DetectConfig) -> Prepared {
-    Prepared { map: HeightMap::from_cloud(cloud, cfg.heightmap_cell), scene: Scene::new(cloud, &cfg.scene) }
+    Prepared {
+        map: HeightMap::from_cloud(cloud, cfg.heightmap_cell),
+        scene: Scene::new(cloud, &cfg.scene),
+    }
 }
 
 /// The best unfolded pose at one hypothesis whose root affordance is present, with the
 /// number of stable fits tried.
-pub fn best_at(agent: &Agent, h: &Hierarchy, scene: &Scene, hyp: &Hypothesis, cfg: &DetectConfig) -> (Option<Unfolded>, usize) {
+pub fn best_at(
+    agent: &Agent,
+    h: &Hierarchy,
+    scene: &Scene,
+    hyp: &Hypothesis,
+    cfg: &DetectConfig,
+) -> (Option<Unfolded>, usize) {
     let fits = fit(agent, h, scene, hyp, &cfg.contact);
     let n = fits.len();
     let best = fits
@@ -146,17 +155,37 @@ pub fn detect(cloud: &PointCloud, agent: &Agent, h: &Hierarchy, cfg: &DetectConf
 }
 
 /// Runs the method on a prepared scene (shared between hierarchies and bodies).
-pub fn detect_prepared(cloud: &PointCloud, prepared: &Prepared, agent: &Agent, h: &Hierarchy, cfg: &DetectConfig) -> Outcome {
+pub fn detect_prepared(
+    cloud: &PointCloud,
+    prepared: &Prepared,
+    agent: &Agent,
+    h: &Hierarchy,
+    cfg: &DetectConfig,
+) -> Outcome {
     let hyps = hypotheses(&prepared.map, &h.hypothesis, h.orientation, agent.height);
-    let results: Vec<(Option<Unfolded>, usize)> =
-        hyps.par_iter().map(|hyp| best_at(agent, h, &prepared.scene, hyp, cfg)).collect();
+    let results: Vec<(Option<Unfolded>, usize)> = hyps
+        .par_iter()
+        .map(|hyp| best_at(agent, h, &prepared.scene, hyp, cfg))
+        .collect();
     let fits = results.iter().map(|r| r.1).sum();
-    let candidates: Vec<(usize, Unfolded)> =
-        results.into_iter().enumerate().filter_map(|(i, (u, _))| u.map(|u| (i, u))).collect();
+    let candidates: Vec<(usize, Unfolded)> = results
+        .into_iter()
+        .enumerate()
+        .filter_map(|(i, (u, _))| u.map(|u| (i, u)))
+        .collect();
     let mut order: Vec<usize> = (0..candidates.len()).collect();
     // Strongest first; ties by hypothesis order, so the result is independent of threads.
-    order.sort_by(|&a, &b| candidates[b].1.score.total_cmp(&candidates[a].1.score).then(a.cmp(&b)));
-    let centres: Vec<Point3<f64>> = candidates.iter().map(|(_, u)| u.placement.position).collect();
+    order.sort_by(|&a, &b| {
+        candidates[b]
+            .1
+            .score
+            .total_cmp(&candidates[a].1.score)
+            .then(a.cmp(&b))
+    });
+    let centres: Vec<Point3<f64>> = candidates
+        .iter()
+        .map(|(_, u)| u.placement.position)
+        .collect();
     let kept = suppress(&centres, &order, h.suppression_radius * agent.height);
     let mut detections: Vec<Detection> = kept
         .iter()

@@ -39,14 +39,22 @@ pub fn headings(h: &Hierarchy, hyp: &Hypothesis) -> Vec<f64> {
 
 fn all_round(step: f64) -> Vec<f64> {
     let n = (std::f64::consts::TAU / step).round().max(1.0) as usize;
-    (0..n).map(|i| i as f64 * std::f64::consts::TAU / n as f64).collect()
+    (0..n)
+        .map(|i| i as f64 * std::f64::consts::TAU / n as f64)
+        .collect()
 }
 
 /// Fits the agent at `hyp` (section 4.2) and returns every stable fit, one per heading that
 /// was free before lowering, touched the scene within the allowed drop, and is stable.
 /// When no heading around the hypothesis heading is free, all round headings are tried
 /// (a gradient off by 90 degrees must not lose the place).
-pub fn fit(agent: &Agent, h: &Hierarchy, scene: &Scene, hyp: &Hypothesis, contact: &ContactConfig) -> Vec<Fit> {
+pub fn fit(
+    agent: &Agent,
+    h: &Hierarchy,
+    scene: &Scene,
+    hyp: &Hypothesis,
+    contact: &ContactConfig,
+) -> Vec<Fit> {
     let first = headings(h, hyp);
     let (fits, any_free) = fit_headings(agent, h, scene, hyp, &first, contact);
     if any_free || hyp.heading.is_none() {
@@ -77,7 +85,10 @@ fn fit_headings(
     let posture = &h.initial;
     let mut frames = Vec::new();
     // Height of the lowest point of the stability links below the root joint.
-    let probe = Placement { position: Point3::origin(), yaw: 0.0 };
+    let probe = Placement {
+        position: Point3::origin(),
+        yaw: 0.0,
+    };
     agent.forward_kinematics(&probe, posture, &mut frames);
     let bottom = agent
         .cylinders(&frames, |j| h.fit.stability_links.contains(&j))
@@ -90,7 +101,10 @@ fn fit_headings(
     let mut out = Vec::new();
     let mut any_free = false;
     for &yaw in yaws {
-        let at = |z: f64| Placement { position: Point3::new(hyp.position.x, hyp.position.y, z), yaw };
+        let at = |z: f64| Placement {
+            position: Point3::new(hyp.position.x, hyp.position.y, z),
+            yaw,
+        };
         let mut parts: Vec<Cylinder> = Vec::new();
         let mut pose = |t: f64, out: &mut Vec<Cylinder>| {
             let mut f = Vec::new();
@@ -98,7 +112,10 @@ fn fit_headings(
             *out = agent.cylinders(&f, |j| !h.fit.unchecked_links.contains(&j));
         };
         pose(0.0, &mut parts);
-        if parts.iter().any(|c| scene.clearance(c) <= 0.0 && scene.intersects(c)) {
+        if parts
+            .iter()
+            .any(|c| scene.clearance(c) <= 0.0 && scene.intersects(c))
+        {
             continue;
         }
         any_free = true;
@@ -111,7 +128,11 @@ fn fit_headings(
         agent.forward_kinematics(&placement, posture, &mut frames);
         let s = stability(agent, h, scene, &frames);
         if s >= h.fit.min_stability {
-            out.push(Fit { placement, posture: posture.clone(), stability: s });
+            out.push(Fit {
+                placement,
+                posture: posture.clone(),
+                stability: s,
+            });
         }
     }
     (out, any_free)
@@ -119,7 +140,12 @@ fn fit_headings(
 
 /// The stability score of Eq. 1: exp(-(mean d_i)^2 / (2 sigma_d^2)) over samples d_i of
 /// the distances from the stability links' surfaces to the scene (metres).
-pub fn stability(agent: &Agent, h: &Hierarchy, scene: &Scene, frames: &[nalgebra::Isometry3<f64>]) -> f64 {
+pub fn stability(
+    agent: &Agent,
+    h: &Hierarchy,
+    scene: &Scene,
+    frames: &[nalgebra::Isometry3<f64>],
+) -> f64 {
     let mut sum = 0.0;
     let mut n = 0usize;
     for c in agent.cylinders(frames, |j| h.fit.stability_links.contains(&j)) {

@@ -15,7 +15,10 @@ pub struct Low {
 
 impl From<[f64; 2]> for Low {
     fn from(v: [f64; 2]) -> Self {
-        Low { full: v[0], zero: v[1] }
+        Low {
+            full: v[0],
+            zero: v[1],
+        }
     }
 }
 
@@ -48,7 +51,12 @@ pub struct Trapezoid {
 
 impl From<[f64; 4]> for Trapezoid {
     fn from(v: [f64; 4]) -> Self {
-        Trapezoid { a: v[0], b: v[1], c: v[2], d: v[3] }
+        Trapezoid {
+            a: v[0],
+            b: v[1],
+            c: v[2],
+            d: v[3],
+        }
     }
 }
 
@@ -68,7 +76,12 @@ impl Trapezoid {
 
     /// The same trapezoid with every breakpoint multiplied by `k` (fractions of H to metres).
     pub fn scaled(&self, k: f64) -> Trapezoid {
-        Trapezoid { a: self.a * k, b: self.b * k, c: self.c * k, d: self.d * k }
+        Trapezoid {
+            a: self.a * k,
+            b: self.b * k,
+            c: self.c * k,
+            d: self.d * k,
+        }
     }
 }
 
@@ -106,7 +119,10 @@ impl Availability {
         let [r0, r1] = self.rise;
         // First x where min(available(x), mu) == mu.
         let value = r0 + mu.clamp(0.0, 1.0) * (r1 - r0);
-        Verdict { available: mu > 1.0 - mu, value }
+        Verdict {
+            available: mu > 1.0 - mu,
+            value,
+        }
     }
 }
 
@@ -122,7 +138,10 @@ mod tests {
 
     #[test]
     fn low_at_breakpoints() {
-        let l = Low { full: 0.1, zero: 0.3 };
+        let l = Low {
+            full: 0.1,
+            zero: 0.3,
+        };
         assert_eq!(l.membership(0.0), 1.0);
         assert_eq!(l.membership(0.1), 1.0);
         assert!((l.membership(0.2) - 0.5).abs() < 1e-12);
@@ -132,7 +151,12 @@ mod tests {
 
     #[test]
     fn trapezoid_at_breakpoints() {
-        let t = Trapezoid { a: 0.2, b: 0.4, c: 0.5, d: 0.7 };
+        let t = Trapezoid {
+            a: 0.2,
+            b: 0.4,
+            c: 0.5,
+            d: 0.7,
+        };
         assert_eq!(t.membership(0.2), 0.0);
         assert!((t.membership(0.3) - 0.5).abs() < 1e-12);
         assert_eq!(t.membership(0.45), 1.0);

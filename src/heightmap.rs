@@ -25,7 +25,14 @@ impl HeightMap {
     /// An empty cloud gives an empty map.
     pub fn from_cloud(cloud: &PointCloud, cell: f64) -> HeightMap {
         let Some((lo, hi)) = cloud.bounds() else {
-            return HeightMap { x0: 0.0, y0: 0.0, cell, nx: 0, ny: 0, heights: Vec::new() };
+            return HeightMap {
+                x0: 0.0,
+                y0: 0.0,
+                cell,
+                nx: 0,
+                ny: 0,
+                heights: Vec::new(),
+            };
         };
         let nx = ((hi.x - lo.x) / cell).floor() as usize + 1;
         let ny = ((hi.y - lo.y) / cell).floor() as usize + 1;
@@ -36,7 +43,14 @@ impl HeightMap {
             let h = &mut heights[iy * nx + ix];
             *h = Some(h.map_or(p.z, |z: f64| z.max(p.z)));
         }
-        HeightMap { x0: lo.x, y0: lo.y, cell, nx, ny, heights }
+        HeightMap {
+            x0: lo.x,
+            y0: lo.y,
+            cell,
+            nx,
+            ny,
+            heights,
+        }
     }
 
     /// Height of cell `(ix, iy)`; `None` if invalid or outside the map.
@@ -110,7 +124,14 @@ mod tests {
 
     #[test]
     fn disc_counts_cells_within_radius() {
-        let m = HeightMap { x0: 0.0, y0: 0.0, cell: 0.05, nx: 0, ny: 0, heights: vec![] };
+        let m = HeightMap {
+            x0: 0.0,
+            y0: 0.0,
+            cell: 0.05,
+            nx: 0,
+            ny: 0,
+            heights: vec![],
+        };
         assert_eq!(m.disc(0.0).len(), 1);
         assert_eq!(m.disc(0.05).len(), 5);
         assert_eq!(m.disc(0.075).len(), 9);

@@ -208,14 +208,22 @@ impl Hierarchy {
 
     fn resolve(file: File, path: &Path, agent: &Agent) -> Result<Hierarchy, ModelError> {
         let link = |key: String, name: &str| {
-            agent
-                .link_index(name)
-                .ok_or_else(|| invalid(path, key, format!("unknown link `{name}` (not in agent `{}`)", agent.name)))
+            agent.link_index(name).ok_or_else(|| {
+                invalid(
+                    path,
+                    key,
+                    format!("unknown link `{name}` (not in agent `{}`)", agent.name),
+                )
+            })
         };
         let joint = |key: String, name: &str| {
-            agent
-                .joint_index(name)
-                .ok_or_else(|| invalid(path, key, format!("unknown joint `{name}` (not in agent `{}`)", agent.name)))
+            agent.joint_index(name).ok_or_else(|| {
+                invalid(
+                    path,
+                    key,
+                    format!("unknown joint `{name}` (not in agent `{}`)", agent.name),
+                )
+            })
         };
         let h = &file.hypothesis;
         for (key, v) in [
@@ -250,18 +258,31 @@ impl Hierarchy {
             .map(|n| link("fit.unchecked_links".into(), n))
             .collect::<Result<Vec<_>, _>>()?;
         // Nodes: resolve parents, then order parents before children.
-        let ids: HashMap<&str, usize> = file.node.iter().enumerate().map(|(i, n)| (n.id.as_str(), i)).collect();
+        let ids: HashMap<&str, usize> = file
+            .node
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.id.as_str(), i))
+            .collect();
         if ids.len() != file.node.len() {
             return Err(invalid(path, "node.id", "duplicate node id"));
         }
         let roots: Vec<&NodeFile> = file.node.iter().filter(|n| n.parent.is_none()).collect();
         if roots.len() != 1 {
-            return Err(invalid(path, "node", "exactly one node must have no parent (the root)"));
+            return Err(invalid(
+                path,
+                "node",
+                "exactly one node must have no parent (the root)",
+            ));
         }
         for n in &file.node {
             if let Some(p) = &n.parent {
                 if !ids.contains_key(p.as_str()) {
-                    return Err(invalid(path, format!("node.{}.parent", n.id), format!("depends on a missing node `{p}`")));
+                    return Err(invalid(
+                        path,
+                        format!("node.{}.parent", n.id),
+                        format!("depends on a missing node `{p}`"),
+                    ));
                 }
             }
         }
@@ -281,17 +302,33 @@ impl Hierarchy {
             }
             if order.len() == before {
                 let stuck = placed.iter().position(|p| !p).unwrap_or(0);
-                return Err(invalid(path, format!("node.{}.parent", file.node[stuck].id), "the nodes form a cycle"));
+                return Err(invalid(
+                    path,
+                    format!("node.{}.parent", file.node[stuck].id),
+                    "the nodes form a cycle",
+                ));
             }
         }
-        let new_index: HashMap<usize, usize> = order.iter().enumerate().map(|(new, &old)| (old, new)).collect();
+        let new_index: HashMap<usize, usize> = order
+            .iter()
+            .enumerate()
+            .map(|(new, &old)| (old, new))
+            .collect();
         let mut nodes = Vec::with_capacity(order.len());
         for &i in &order {
             let n = &file.node[i];
             let key = |k: &str| format!("node.{}.{k}", n.id);
-            let links = n.links.iter().map(|l| link(key("links"), l)).collect::<Result<Vec<_>, _>>()?;
+            let links = n
+                .links
+                .iter()
+                .map(|l| link(key("links"), l))
+                .collect::<Result<Vec<_>, _>>()?;
             if links.is_empty() {
-                return Err(invalid(path, key("links"), "a node needs at least one link to check"));
+                return Err(invalid(
+                    path,
+                    key("links"),
+                    "a node needs at least one link to check",
+                ));
             }
             let mut sweeps = Vec::new();
             for s in &n.sweep {
@@ -310,8 +347,12 @@ impl Hierarchy {
                     None => agent.joints[j].axis,
                     Some(a) => {
                         let v = Vector3::from(a);
-                        if !(v.norm() > 1e-9) {
-                            return Err(invalid(path, key(&format!("sweep.{}.axis", s.joint)), "must be a non-zero vector"));
+                        if v.norm().is_nan() || v.norm() <= 1e-9 {
+                            return Err(invalid(
+                                path,
+                                key(&format!("sweep.{}.axis", s.joint)),
+                                "must be a non-zero vector",
+                            ));
                         }
                         Unit::new_normalize(v)
                     }
@@ -325,7 +366,11 @@ impl Hierarchy {
                 });
             }
             if sweeps.is_empty() {
-                return Err(invalid(path, key("sweep"), "a node needs at least one joint sweep"));
+                return Err(invalid(
+                    path,
+                    key("sweep"),
+                    "a node needs at least one joint sweep",
+                ));
             }
             nodes.push(Node {
                 id: n.id.clone(),

@@ -27,7 +27,12 @@ pub struct Hypothesis {
 
 /// Rates every valid cell of `map` with the rule of section 4.1 for an agent of body
 /// height `body_height` (metres) and returns the available ones in row-major cell order.
-pub fn hypotheses(map: &HeightMap, rule_: &HypothesisRule, orientation: Orientation, body_height: f64) -> Vec<Hypothesis> {
+pub fn hypotheses(
+    map: &HeightMap,
+    rule_: &HypothesisRule,
+    orientation: Orientation,
+    body_height: f64,
+) -> Vec<Hypothesis> {
     let template = map.disc(rule_.template_diameter * body_height / 2.0);
     let neighbourhood = map.disc(rule_.gradient_radius * body_height);
     let height = rule_.height.map(|t| t.scaled(body_height));
@@ -54,16 +59,20 @@ pub fn hypotheses(map: &HeightMap, rule_: &HypothesisRule, orientation: Orientat
                 rule_.roughness.membership(roughness),
                 height.map_or(1.0, |t| t.membership(mean)),
             ];
-            let verdict = rule_
-                .available
-                .defuzzify(rule(memberships[0], memberships[1], memberships[2]));
+            let verdict =
+                rule_
+                    .available
+                    .defuzzify(rule(memberships[0], memberships[1], memberships[2]));
             if !verdict.available {
                 continue;
             }
-            let heading = descent(map, ix, iy, &neighbourhood, rule_.flat_gradient).map(|d| match orientation {
-                Orientation::Parallel => d,
-                Orientation::Orthogonal => d + std::f64::consts::FRAC_PI_2,
-            });
+            let heading =
+                descent(map, ix, iy, &neighbourhood, rule_.flat_gradient).map(
+                    |d| match orientation {
+                        Orientation::Parallel => d,
+                        Orientation::Orthogonal => d + std::f64::consts::FRAC_PI_2,
+                    },
+                );
             let (x, y) = map.centre(ix, iy);
             out.push(Hypothesis {
                 cell: (ix, iy),
@@ -80,7 +89,13 @@ pub fn hypotheses(map: &HeightMap, rule_: &HypothesisRule, orientation: Orientat
 
 /// Direction (radians about z) of steepest descent of the least-squares plane through the
 /// valid cells of the neighbourhood; `None` if the slope is below `flat` (m/m).
-pub fn descent(map: &HeightMap, ix: usize, iy: usize, neighbourhood: &[(isize, isize)], flat: f64) -> Option<f64> {
+pub fn descent(
+    map: &HeightMap,
+    ix: usize,
+    iy: usize,
+    neighbourhood: &[(isize, isize)],
+    flat: f64,
+) -> Option<f64> {
     // Normal equations of h = a + gx * dx + gy * dy, dx and dy in metres.
     let mut ata = Matrix3::<f64>::zeros();
     let mut atb = Vector3::<f64>::zeros();
@@ -109,9 +124,20 @@ mod tests {
             template_diameter: 0.1,
             gradient_radius: 0.1,
             flat_gradient: 0.05,
-            discontinuity: Low { full: 0.1, zero: 0.4 },
-            roughness: Low { full: 0.01, zero: 0.04 },
-            height: Some(Trapezoid { a: 0.2, b: 0.3, c: 0.5, d: 0.6 }),
+            discontinuity: Low {
+                full: 0.1,
+                zero: 0.4,
+            },
+            roughness: Low {
+                full: 0.01,
+                zero: 0.04,
+            },
+            height: Some(Trapezoid {
+                a: 0.2,
+                b: 0.3,
+                c: 0.5,
+                d: 0.6,
+            }),
             available: Availability { rise: [0.3, 0.7] },
         }
     }
@@ -119,16 +145,33 @@ mod tests {
     fn map(f: impl Fn(usize, usize) -> Option<f64>) -> HeightMap {
         let (nx, ny) = (20, 20);
         let heights = (0..nx * ny).map(|i| f(i % nx, i / nx)).collect();
-        HeightMap { x0: 0.0, y0: 0.0, cell: 0.05, nx, ny, heights }
+        HeightMap {
+            x0: 0.0,
+            y0: 0.0,
+            cell: 0.05,
+            nx,
+            ny,
+            heights,
+        }
     }
 
     #[test]
     fn a_seat_high_plateau_is_available_and_the_floor_is_not() {
         // Body height 1.0: template radius 0.05 m (5 cells), seat of 8 x 8 cells at 0.45 m.
-        let m = map(|x, y| Some(if (6..14).contains(&x) && (6..14).contains(&y) { 0.45 } else { 0.0 }));
+        let m = map(|x, y| {
+            Some(if (6..14).contains(&x) && (6..14).contains(&y) {
+                0.45
+            } else {
+                0.0
+            })
+        });
         let h = hypotheses(&m, &rule_(), Orientation::Parallel, 1.0);
         assert!(h.iter().any(|h| h.cell == (10, 10)));
-        assert!(h.iter().all(|h| (7..13).contains(&h.cell.0) && (7..13).contains(&h.cell.1)), "only seat interior");
+        assert!(
+            h.iter()
+                .all(|h| (7..13).contains(&h.cell.0) && (7..13).contains(&h.cell.1)),
+            "only seat interior"
+        );
         let c = h.iter().find(|h| h.cell == (10, 10)).unwrap();
         assert!((c.position.z - 0.45).abs() < 1e-12);
         assert_eq!(c.memberships, [1.0, 1.0, 1.0]);
@@ -150,6 +193,9 @@ mod tests {
         assert!(d.abs() < 1e-9, "heading {d}");
         let m = map(|_, y| Some(0.01 * y as f64));
         let d = descent(&m, 10, 10, &m.disc(0.2), 0.05).unwrap();
-        assert!((d + std::f64::consts::FRAC_PI_2).abs() < 1e-9, "heading {d}");
+        assert!(
+            (d + std::f64::consts::FRAC_PI_2).abs() < 1e-9,
+            "heading {d}"
+        );
     }
 }

@@ -18,6 +18,8 @@ pub mod heightmap;
 pub mod hierarchy;
 pub mod hypotheses;
 pub mod model;
+pub mod report;
+pub mod run;
 pub mod scene;
 pub mod select;
 pub mod synth;

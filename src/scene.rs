@@ -51,9 +51,9 @@ impl Scene {
     /// Voxelises `cloud` (world frame, metres).
     pub fn new(cloud: &PointCloud, cfg: &SceneConfig) -> Scene {
         let v = cfg.voxel_size;
-        let origin = cloud
-            .bounds()
-            .map_or(Vector3::zeros(), |(lo, hi)| ((lo.coords + hi.coords) / 2.0).map(|c| (c / v).round() * v));
+        let origin = cloud.bounds().map_or(Vector3::zeros(), |(lo, hi)| {
+            ((lo.coords + hi.coords) / 2.0).map(|c| (c / v).round() * v)
+        });
         let mut keys: Vec<[i64; 3]> = cloud
             .points
             .iter()
@@ -65,7 +65,15 @@ impl Scene {
         keys.sort_unstable();
         keys.dedup();
         if keys.is_empty() {
-            return Scene { voxel: v, origin, voxels: None, field: None, floor: cfg.floor, occupied: None, count: 0 };
+            return Scene {
+                voxel: v,
+                origin,
+                voxels: None,
+                field: None,
+                floor: cfg.floor,
+                occupied: None,
+                count: 0,
+            };
         }
         let mut lo = keys[0];
         let mut hi = keys[0];
@@ -75,15 +83,27 @@ impl Scene {
                 hi[a] = hi[a].max(k[a]);
             }
         }
-        let ivs: Vec<IVector> = keys.iter().map(|k| IVector::new(k[0] as i32, k[1] as i32, k[2] as i32)).collect();
+        let ivs: Vec<IVector> = keys
+            .iter()
+            .map(|k| IVector::new(k[0] as i32, k[1] as i32, k[2] as i32))
+            .collect();
         let voxels = Voxels::new(Vector::splat(v as f32), &ivs);
         let margin = (cfg.field_margin / v).ceil() as i64;
         let fmin = [lo[0] - margin, lo[1] - margin, lo[2] - margin];
         let dims = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1 + 2 * margin) as usize);
         let field = DistanceField::new(fmin, dims, &keys, v);
-        let world = |k: [i64; 3]| Point3::new(k[0] as f64 * v, k[1] as f64 * v, k[2] as f64 * v) + origin;
+        let world =
+            |k: [i64; 3]| Point3::new(k[0] as f64 * v, k[1] as f64 * v, k[2] as f64 * v) + origin;
         let occupied = Some((world(lo), world([hi[0] + 1, hi[1] + 1, hi[2] + 1])));
-        Scene { voxel: v, origin, voxels: Some(voxels), field: Some(field), floor: cfg.floor, occupied, count: keys.len() }
+        Scene {
+            voxel: v,
+            origin,
+            voxels: Some(voxels),
+            field: Some(field),
+            floor: cfg.floor,
+            occupied,
+            count: keys.len(),
+        }
     }
 
     /// Number of occupied voxels.
@@ -121,7 +141,11 @@ impl Scene {
     /// A lower bound on the gap (metres) between the body part `c` and the scene (voxels and
     /// floor); positive means certainly free, zero or negative means contact is possible.
     pub fn clearance(&self, c: &Cylinder) -> f64 {
-        let floor = if self.floor { floor_gap(c) } else { f64::INFINITY };
+        let floor = if self.floor {
+            floor_gap(c)
+        } else {
+            f64::INFINITY
+        };
         if self.field.is_none() {
             return floor;
         }
@@ -153,7 +177,10 @@ impl Scene {
         }
         let mid = nalgebra::center(&c.a, &c.b).coords - self.origin;
         let dir = axis / len;
-        let rot = Rotation::from_rotation_arc(Vector::Y, Vector::new(dir.x as f32, dir.y as f32, dir.z as f32));
+        let rot = Rotation::from_rotation_arc(
+            Vector::Y,
+            Vector::new(dir.x as f32, dir.y as f32, dir.z as f32),
+        );
         let pose = Pose::from_parts(Vector::new(mid.x as f32, mid.y as f32, mid.z as f32), rot);
         let shape = ParryCylinder::new((len / 2.0) as f32, c.radius as f32);
         parry3d::query::intersection_test(&Pose::IDENTITY, voxels, &pose, &shape)
@@ -164,7 +191,11 @@ impl Scene {
     /// Distance (metres, >= 0) from the surface of a body part of radius `radius` whose axis
     /// passes through `p` to the nearest voxel or the floor: the d_i of Eq. 1.
     pub fn surface_distance(&self, p: &Point3<f64>, radius: f64) -> f64 {
-        let floor = if self.floor { p.z - radius } else { f64::INFINITY };
+        let floor = if self.floor {
+            p.z - radius
+        } else {
+            f64::INFINITY
+        };
         // The field holds centre distances: take back the quantisation slack for a
         // central estimate, and the half voxel to reach the voxel's face.
         let d = match (&self.field, self.occupied) {
@@ -190,7 +221,12 @@ impl Scene {
     /// Free space is crossed in steps as long as the distance field's clearance allows
     /// (conservative advancement); exact parry3d tests are made only for parts whose
     /// clearance bound is not positive, and the contact is refined by bisection.
-    pub fn first_contact(&self, mut motion: impl FnMut(f64, &mut Vec<Cylinder>), speed: f64, resolution: f64) -> Option<f64> {
+    pub fn first_contact(
+        &self,
+        mut motion: impl FnMut(f64, &mut Vec<Cylinder>),
+        speed: f64,
+        resolution: f64,
+    ) -> Option<f64> {
         let mut parts = Vec::new();
         let min_step = if speed > 0.0 { resolution / speed } else { 1.0 };
         let mut touching = |t: f64, parts: &mut Vec<Cylinder>| -> (bool, f64) {
@@ -228,7 +264,11 @@ impl Scene {
             if t >= 1.0 {
                 return None;
             }
-            let step = if gap > 0.0 && speed > 0.0 { (gap / speed).max(min_step) } else { min_step };
+            let step = if gap > 0.0 && speed > 0.0 {
+                (gap / speed).max(min_step)
+            } else {
+                min_step
+            };
             t = (t + step).min(1.0);
         }
     }
@@ -238,7 +278,11 @@ impl Scene {
 fn floor_gap(c: &Cylinder) -> f64 {
     let axis = c.b - c.a;
     let len = axis.norm();
-    let sin = if len > 1e-12 { (1.0 - (axis.z / len).powi(2)).max(0.0).sqrt() } else { 1.0 };
+    let sin = if len > 1e-12 {
+        (1.0 - (axis.z / len).powi(2)).max(0.0).sqrt()
+    } else {
+        1.0
+    };
     c.a.z.min(c.b.z) - c.radius * sin
 }
 
@@ -250,7 +294,11 @@ impl DistanceField {
         let [nx, ny, nz] = dims;
         let mut d = vec![FAR; nx * ny * nz];
         for k in keys {
-            let (x, y, z) = ((k[0] - min[0]) as usize, (k[1] - min[1]) as usize, (k[2] - min[2]) as usize);
+            let (x, y, z) = (
+                (k[0] - min[0]) as usize,
+                (k[1] - min[1]) as usize,
+                (k[2] - min[2]) as usize,
+            );
             d[(z * ny + y) * nx + x] = 0.0;
         }
         let longest = nx.max(ny).max(nz);
@@ -263,7 +311,9 @@ impl DistanceField {
         for axis in 0..3 {
             let n = dims[axis];
             let stride = strides[axis];
-            let others: Vec<usize> = (0..nx * ny * nz).filter(|&i| (i / stride) % n == 0).collect();
+            let others: Vec<usize> = (0..nx * ny * nz)
+                .filter(|&i| (i / stride) % n == 0)
+                .collect();
             for start in others {
                 for i in 0..n {
                     f[i] = d[start + i * stride];
@@ -275,7 +325,11 @@ impl DistanceField {
             }
         }
         for x in d.iter_mut() {
-            *x = if *x >= FAR / 2.0 { f32::INFINITY } else { x.sqrt() * v as f32 };
+            *x = if *x >= FAR / 2.0 {
+                f32::INFINITY
+            } else {
+                x.sqrt() * v as f32
+            };
         }
         DistanceField { min, dims, dist: d }
     }
@@ -303,7 +357,8 @@ fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
     for q in 1..n {
         loop {
             let p = v[k];
-            let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32)) / (2.0 * q as f32 - 2.0 * p as f32);
+            let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32))
+                / (2.0 * q as f32 - 2.0 * p as f32);
             if s <= z[k] && k > 0 {
                 k -= 1;
             } else if s <= z[k] {
@@ -337,7 +392,11 @@ mod tests {
     use super::*;
 
     fn cfg(floor: bool) -> SceneConfig {
-        SceneConfig { voxel_size: 0.02, floor, field_margin: 0.2 }
+        SceneConfig {
+            voxel_size: 0.02,
+            floor,
+            field_margin: 0.2,
+        }
     }
 
     fn slab(z: f64) -> PointCloud {
@@ -352,7 +411,12 @@ mod tests {
     }
 
     fn vertical(x: f64, y: f64, bottom: f64, top: f64, r: f64) -> Cylinder {
-        Cylinder { joint: 0, a: Point3::new(x, y, bottom), b: Point3::new(x, y, top), radius: r }
+        Cylinder {
+            joint: 0,
+            a: Point3::new(x, y, bottom),
+            b: Point3::new(x, y, top),
+            radius: r,
+        }
     }
 
     #[test]
@@ -361,9 +425,13 @@ mod tests {
         let mut d = vec![0.0; f.len()];
         let (mut v, mut z) = (vec![0; f.len()], vec![0.0; f.len() + 1]);
         edt_1d(&f, &mut d, &mut v, &mut z);
-        for q in 0..f.len() {
-            let brute = (0..f.len()).map(|p| (q as f32 - p as f32).powi(2) + f[p]).fold(f32::INFINITY, f32::min);
-            assert_eq!(d[q], brute, "at {q}");
+        for (q, dq) in d.iter().enumerate() {
+            let brute = f
+                .iter()
+                .enumerate()
+                .map(|(p, fp)| (q as f32 - p as f32).powi(2) + fp)
+                .fold(f32::INFINITY, f32::min);
+            assert_eq!(*dq, brute, "at {q}");
         }
     }
 
@@ -387,7 +455,12 @@ mod tests {
         // Off the slab, only the floor: a leg ending 1 cm above it is free, 1 cm below is not.
         assert!(!s.intersects(&vertical(1.5, 1.5, 0.01, 0.4, 0.03)));
         assert!(s.intersects(&vertical(1.5, 1.5, -0.01, 0.4, 0.03)));
-        let lying = Cylinder { joint: 0, a: Point3::new(2.0, 2.0, 0.04), b: Point3::new(2.5, 2.0, 0.04), radius: 0.05 };
+        let lying = Cylinder {
+            joint: 0,
+            a: Point3::new(2.0, 2.0, 0.04),
+            b: Point3::new(2.5, 2.0, 0.04),
+            radius: 0.05,
+        };
         assert!(s.intersects(&lying));
         assert!((s.clearance(&lying) + 0.01).abs() < 1e-9);
     }

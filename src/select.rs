@@ -28,7 +28,10 @@ pub fn suppress(centres: &[Point3<f64>], order: &[usize], radius: f64) -> Vec<us
     let mut kept: Vec<usize> = Vec::new();
     for &i in order {
         let c = centres[i];
-        if kept.iter().all(|&k| (centres[k].xy() - c.xy()).norm() > radius) {
+        if kept
+            .iter()
+            .all(|&k| (centres[k].xy() - c.xy()).norm() > radius)
+        {
             kept.push(i);
         }
     }
@@ -37,10 +40,20 @@ pub fn suppress(centres: &[Point3<f64>], order: &[usize], radius: f64) -> Vec<us
 
 /// Region growing from each seed in turn: returns, per point, the index of the seed whose
 /// segment took it (earlier seeds win), or `None`.
-pub fn segment(cloud: &PointCloud, seeds: &[Point3<f64>], cfg: &SegmentConfig) -> Vec<Option<usize>> {
+pub fn segment(
+    cloud: &PointCloud,
+    seeds: &[Point3<f64>],
+    cfg: &SegmentConfig,
+) -> Vec<Option<usize>> {
     let mut label: Vec<Option<usize>> = vec![None; cloud.len()];
     let cell = cfg.grow_distance.max(1e-6);
-    let key = |p: &Point3<f64>| ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64, (p.z / cell).floor() as i64);
+    let key = |p: &Point3<f64>| {
+        (
+            (p.x / cell).floor() as i64,
+            (p.y / cell).floor() as i64,
+            (p.z / cell).floor() as i64,
+        )
+    };
     let mut grid: HashMap<(i64, i64, i64), Vec<usize>> = HashMap::new();
     for (i, p) in cloud.points.iter().enumerate() {
         if p.z >= cfg.floor_height {
@@ -55,8 +68,13 @@ pub fn segment(cloud: &PointCloud, seeds: &[Point3<f64>], cfg: &SegmentConfig) -
         for dz in -reach..=reach {
             for dy in -reach..=reach {
                 for dx in -reach..=reach {
-                    for &i in grid.get(&(k.0 + dx, k.1 + dy, k.2 + dz)).into_iter().flatten() {
-                        if label[i].is_none() && (cloud.points[i] - seed).norm() <= cfg.seed_radius {
+                    for &i in grid
+                        .get(&(k.0 + dx, k.1 + dy, k.2 + dz))
+                        .into_iter()
+                        .flatten()
+                    {
+                        if label[i].is_none() && (cloud.points[i] - seed).norm() <= cfg.seed_radius
+                        {
                             label[i] = Some(s);
                             queue.push(i);
                         }
@@ -74,7 +92,11 @@ pub fn segment(cloud: &PointCloud, seeds: &[Point3<f64>], cfg: &SegmentConfig) -
             for dz in -1..=1 {
                 for dy in -1..=1 {
                     for dx in -1..=1 {
-                        for &j in grid.get(&(k.0 + dx, k.1 + dy, k.2 + dz)).into_iter().flatten() {
+                        for &j in grid
+                            .get(&(k.0 + dx, k.1 + dy, k.2 + dz))
+                            .into_iter()
+                            .flatten()
+                        {
                             if label[j].is_none() && (cloud.points[j] - p).norm_squared() <= r2 {
                                 label[j] = Some(s);
                                 queue.push(j);
@@ -95,7 +117,11 @@ mod tests {
 
     #[test]
     fn suppression_keeps_the_strongest_of_neighbours() {
-        let c = vec![Point3::new(0.0, 0.0, 0.4), Point3::new(0.1, 0.0, 0.4), Point3::new(1.0, 0.0, 0.4)];
+        let c = vec![
+            Point3::new(0.0, 0.0, 0.4),
+            Point3::new(0.1, 0.0, 0.4),
+            Point3::new(1.0, 0.0, 0.4),
+        ];
         assert_eq!(suppress(&c, &[1, 0, 2], 0.3), vec![1, 2]);
         assert_eq!(suppress(&c, &[0, 1, 2], 0.05), vec![0, 1, 2]);
     }
@@ -110,10 +136,17 @@ mod tests {
             pts.push(Point3::new(i as f64 * 0.01, 0.0, 0.0));
         }
         let cloud = PointCloud::new(pts);
-        let cfg = SegmentConfig { grow_distance: 0.02, floor_height: 0.05, seed_radius: 0.03, max_points: 1000 };
+        let cfg = SegmentConfig {
+            grow_distance: 0.02,
+            floor_height: 0.05,
+            seed_radius: 0.03,
+            max_points: 1000,
+        };
         let l = segment(&cloud, &[Point3::new(0.0, 0.0, 0.45)], &cfg);
         let taken: Vec<usize> = (0..cloud.len()).filter(|&i| l[i] == Some(0)).collect();
         assert_eq!(taken.len(), 30);
-        assert!(taken.iter().all(|&i| cloud.points[i].y == 0.0 && cloud.points[i].z == 0.45));
+        assert!(taken
+            .iter()
+            .all(|&i| cloud.points[i].y == 0.0 && cloud.points[i].z == 0.45));
     }
 }

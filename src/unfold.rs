@@ -60,7 +60,13 @@ pub fn local_score(sq_error: Option<f64>, sigma_theta: f64, epsilon: f64) -> f64
 }
 
 /// Unfolds the hierarchy from a fit (sections 4.3 and 4.4).
-pub fn unfold(agent: &Agent, h: &Hierarchy, scene: &Scene, fit: &Fit, contact: &ContactConfig) -> Unfolded {
+pub fn unfold(
+    agent: &Agent,
+    h: &Hierarchy,
+    scene: &Scene,
+    fit: &Fit,
+    contact: &ContactConfig,
+) -> Unfolded {
     let mut posture = fit.posture.clone();
     let mut nodes: Vec<NodeOutcome> = Vec::with_capacity(h.nodes.len());
     let mut score = 0.0;
@@ -70,16 +76,31 @@ pub fn unfold(agent: &Agent, h: &Hierarchy, scene: &Scene, fit: &Fit, contact: &
             Some(p) => nodes[p].visited && nodes[p].found == node.when,
         };
         if !visited {
-            nodes.push(NodeOutcome { visited: false, found: false, local: 0.0 });
+            nodes.push(NodeOutcome {
+                visited: false,
+                found: false,
+                local: 0.0,
+            });
             continue;
         }
-        let (found, local) = unfold_node(agent, h, scene, &fit.placement, &mut posture, node, contact);
+        let (found, local) =
+            unfold_node(agent, h, scene, &fit.placement, &mut posture, node, contact);
         if found {
             score = t_conorm(score, local);
         }
-        nodes.push(NodeOutcome { visited: true, found, local });
+        nodes.push(NodeOutcome {
+            visited: true,
+            found,
+            local,
+        });
     }
-    Unfolded { placement: fit.placement, posture, nodes, score, stability: fit.stability }
+    Unfolded {
+        placement: fit.placement,
+        posture,
+        nodes,
+        score,
+        stability: fit.stability,
+    }
 }
 
 /// Sweeps one node's joints, writing the resulting angles (Eq. 2) into `posture`;
@@ -104,7 +125,11 @@ fn unfold_node(
             .links
             .iter()
             .copied()
-            .filter(|&l| branch.iter().any(|&s| agent.is_descendant(l, node.sweeps[s].joint)))
+            .filter(|&l| {
+                branch
+                    .iter()
+                    .any(|&s| agent.is_descendant(l, node.sweeps[s].joint))
+            })
             .collect();
         let speed: f64 = branch
             .iter()
@@ -138,7 +163,10 @@ fn unfold_node(
         }
         let sq = sq / branch.len() as f64;
         found |= hit.is_some();
-        local = t_norm(local, local_score(hit.map(|_| sq), h.score.sigma_theta, h.score.epsilon));
+        local = t_norm(
+            local,
+            local_score(hit.map(|_| sq), h.score.sigma_theta, h.score.epsilon),
+        );
     }
     (found, local)
 }
@@ -150,7 +178,13 @@ pub fn branches(agent: &Agent, node: &Node) -> Vec<Vec<usize>> {
     let moves: Vec<Vec<usize>> = node
         .sweeps
         .iter()
-        .map(|s| node.links.iter().copied().filter(|&l| agent.is_descendant(l, s.joint)).collect())
+        .map(|s| {
+            node.links
+                .iter()
+                .copied()
+                .filter(|&l| agent.is_descendant(l, s.joint))
+                .collect()
+        })
         .collect();
     let mut group: Vec<usize> = (0..n).collect();
     for i in 0..n {

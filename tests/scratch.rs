@@ -1,3 +1,4 @@
+//! Scratch driver (to be replaced by the integration tests).
 use afford::agent::Agent;
 use afford::detect::{detect, DetectConfig};
 use afford::hierarchy::Hierarchy;
@@ -24,7 +25,18 @@ fn scratch() {
         let out = detect(&cloud, &agent, &h, &cfg);
         println!("{name}: {:?} in {:?}", out.stats, t.elapsed());
         for d in out.detections.iter().take(4) {
-            println!("   {:?} at ({:.2},{:.2},{:.2}) yaw {:.0} score {:.3} stab {:.2} seg {} local {:?}", d.affordances, d.position.x, d.position.y, d.position.z, d.yaw.to_degrees(), d.score, d.stability, d.segment_points, d.local_scores);
+            println!(
+                "   {:?} at ({:.2},{:.2},{:.2}) yaw {:.0} score {:.3} stab {:.2} seg {} local {:?}",
+                d.affordances,
+                d.position.x,
+                d.position.y,
+                d.position.z,
+                d.yaw.to_degrees(),
+                d.score,
+                d.stability,
+                d.segment_points,
+                d.local_scores
+            );
         }
     }
 }

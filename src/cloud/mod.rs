@@ -124,8 +124,10 @@ impl PointCloud {
     /// Axis-aligned bounds `(min, max)` in metres, or `None` for an empty cloud.
     pub fn bounds(&self) -> Option<(Point3<f64>, Point3<f64>)> {
         let first = *self.points.first()?;
-        Some(self.points.iter().fold((first, first), |(lo, hi), p| {
-            (lo.inf(p), hi.sup(p))
-        }))
+        Some(
+            self.points
+                .iter()
+                .fold((first, first), |(lo, hi), p| (lo.inf(p), hi.sup(p))),
+        )
     }
 }

@@ -1,0 +1,265 @@
+//! Outputs (see "Interfaces others depend on" in README): JSON per run, detections CSV,
+//! summary CSV, segments PLY, and a short human-readable table. Every file is written to a
+//! temporary file beside it and renamed into place, so nothing half-written is left.
+//!
+//! Numbers are printed with fixed decimals so that the same input gives the same bytes.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::detect::{Detection, Outcome};
+
+/// The result of one input file, as it goes into the outputs.
+#[derive(Debug, Clone)]
+pub struct FileReport {
+    /// The file as named on the command line (or relative to a labels file).
+    pub file: String,
+    /// Body height, metres.
+    pub height: f64,
+    /// Agent name.
+    pub agent: String,
+    /// Affordance ids of the hierarchy, in node order.
+    pub ids: Vec<String>,
+    /// What detection produced.
+    pub outcome: Outcome,
+    /// Points dropped for non-finite coordinates.
+    pub dropped_non_finite: usize,
+}
+
+/// Rounds to `d` decimals for output (stable bytes, no float noise).
+fn round(x: f64, d: i32) -> f64 {
+    let k = 10f64.powi(d);
+    let r = (x * k).round() / k;
+    if r == 0.0 {
+        0.0
+    } else {
+        r
+    }
+}
+
+#[derive(Serialize)]
+struct JsonDetection<'a> {
+    detection: usize,
+    hierarchy: &'a str,
+    position: [f64; 3],
+    yaw_deg: f64,
+    affordances: &'a [String],
+    score: f64,
+    stability: f64,
+    availability: f64,
+    local_scores: serde_json::Map<String, serde_json::Value>,
+    pose_deg: serde_json::Map<String, serde_json::Value>,
+    segment_points: usize,
+}
+
+#[derive(Serialize)]
+struct JsonFile<'a> {
+    file: &'a str,
+    agent: &'a str,
+    height: f64,
+    points: usize,
+    dropped_non_finite: usize,
+    hypotheses: usize,
+    fits: usize,
+    affordances: Vec<&'a str>,
+    detections: Vec<JsonDetection<'a>>,
+}
+
+fn json_file(r: &FileReport) -> JsonFile<'_> {
+    let found = affords(r);
+    JsonFile {
+        file: &r.file,
+        agent: &r.agent,
+        height: round(r.height, 3),
+        points: r.outcome.stats.points,
+        dropped_non_finite: r.dropped_non_finite,
+        hypotheses: r.outcome.stats.hypotheses,
+        fits: r.outcome.stats.fits,
+        affordances: r
+            .ids
+            .iter()
+            .filter(|id| found.contains(id))
+            .map(|s| s.as_str())
+            .collect(),
+        detections: r
+            .outcome
+            .detections
+            .iter()
+            .enumerate()
+            .map(|(i, d)| json_detection(i, d))
+            .collect(),
+    }
+}
+
+fn json_detection(i: usize, d: &Detection) -> JsonDetection<'_> {
+    let num = |x: f64| serde_json::Value::from(round(x, 4));
+    JsonDetection {
+        detection: i,
+        hierarchy: &d.hierarchy,
+        position: [
+            round(d.position.x, 4),
+            round(d.position.y, 4),
+            round(d.position.z, 4),
+        ],
+        yaw_deg: round(d.yaw.to_degrees(), 2),
+        affordances: &d.affordances,
+        score: round(d.score, 4),
+        stability: round(d.stability, 4),
+        availability: round(d.availability, 4),
+        local_scores: d
+            .local_scores
+            .iter()
+            .map(|(k, v)| (k.clone(), num(*v)))
+            .collect(),
+        pose_deg: d
+            .pose
+            .iter()
+            .map(|(k, v)| (k.clone(), serde_json::Value::from(round(*v, 2))))
+            .collect(),
+        segment_points: d.segment_points,
+    }
+}
+
+/// The affordance ids a file affords: those of any of its detections.
+pub fn affords(r: &FileReport) -> Vec<&String> {
+    r.ids
+        .iter()
+        .filter(|id| {
+            r.outcome
+                .detections
+                .iter()
+                .any(|d| d.affordances.contains(id))
+        })
+        .collect()
+}
+
+/// The JSON document of a run: `{"files": [...]}` with one entry per input file.
+pub fn to_json(reports: &[FileReport]) -> String {
+    #[derive(Serialize)]
+    struct Doc<'a> {
+        version: u32,
+        files: Vec<JsonFile<'a>>,
+    }
+    let doc = Doc {
+        version: 1,
+        files: reports.iter().map(json_file).collect(),
+    };
+    let mut s = serde_json::to_string_pretty(&doc).unwrap_or_default();
+    s.push('\n');
+    s
+}
+
+/// The detections CSV: `file,detection,hierarchy,x,y,z,yaw_deg,score,stability,affordances,segment_points`.
+pub fn to_csv(reports: &[FileReport]) -> Result<String, csv::Error> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record([
+        "file",
+        "detection",
+        "hierarchy",
+        "x",
+        "y",
+        "z",
+        "yaw_deg",
+        "score",
+        "stability",
+        "affordances",
+        "segment_points",
+    ])?;
+    for r in reports {
+        for (i, d) in r.outcome.detections.iter().enumerate() {
+            w.write_record([
+                r.file.clone(),
+                i.to_string(),
+                d.hierarchy.clone(),
+                format!("{:.4}", d.position.x),
+                format!("{:.4}", d.position.y),
+                format!("{:.4}", d.position.z),
+                format!("{:.2}", d.yaw.to_degrees()),
+                format!("{:.4}", d.score),
+                format!("{:.4}", d.stability),
+                d.affordances.join(";"),
+                d.segment_points.to_string(),
+            ])?;
+        }
+    }
+    Ok(String::from_utf8(w.into_inner().map_err(|e| e.into_error())?).unwrap_or_default())
+}
+
+/// The summary CSV: `file` then one 0/1 column per affordance id (the shape of `labels.csv`).
+pub fn to_summary(reports: &[FileReport]) -> Result<String, csv::Error> {
+    let mut ids: Vec<&String> = Vec::new();
+    for r in reports {
+        for id in &r.ids {
+            if !ids.contains(&id) {
+                ids.push(id);
+            }
+        }
+    }
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut header = vec!["file".to_string()];
+    header.extend(ids.iter().map(|s| s.to_string()));
+    w.write_record(&header)?;
+    for r in reports {
+        let found = affords(r);
+        let mut row = vec![r.file.clone()];
+        row.extend(
+            ids.iter()
+                .map(|id| if found.contains(id) { "1" } else { "0" }.to_string()),
+        );
+        w.write_record(&row)?;
+    }
+    Ok(String::from_utf8(w.into_inner().map_err(|e| e.into_error())?).unwrap_or_default())
+}
+
+/// A short table of the detections for a terminal.
+pub fn to_table(r: &FileReport) -> String {
+    let mut s = format!(
+        "{}: {} points, {} hypotheses, {} detections; affords: {}\n",
+        r.file,
+        r.outcome.stats.points,
+        r.outcome.stats.hypotheses,
+        r.outcome.detections.len(),
+        match affords(r) {
+            a if a.is_empty() => "nothing".to_string(),
+            a => a.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", "),
+        }
+    );
+    for (i, d) in r.outcome.detections.iter().enumerate() {
+        s.push_str(&format!(
+            "  #{i:<3} x {:>7.3}  y {:>7.3}  z {:>6.3}  yaw {:>6.1}  score {:.3}  stability {:.3}  {}\n",
+            d.position.x,
+            d.position.y,
+            d.position.z,
+            d.yaw.to_degrees(),
+            d.score,
+            d.stability,
+            d.affordances.join(", ")
+        ));
+    }
+    s
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = temp_path(path);
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
+}

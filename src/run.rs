@@ -1,0 +1,174 @@
+//! The `detect` command as a library function: loads the models once, runs every input
+//! file independently (one bad file does not stop the others), and writes the outputs.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::agent::Agent;
+use crate::cloud;
+use crate::detect::{detect, DetectConfig};
+use crate::hierarchy::Hierarchy;
+use crate::model::ModelError;
+use crate::report::{self, FileReport};
+
+/// Everything `afford detect` was asked to do, validated.
+#[derive(Debug, Clone)]
+pub struct DetectRequest {
+    /// Input clouds.
+    pub files: Vec<PathBuf>,
+    /// Agent model file.
+    pub agent: PathBuf,
+    /// Hierarchy file.
+    pub affordances: PathBuf,
+    /// Body height, metres.
+    pub height: f64,
+    /// JSON output.
+    pub json: Option<PathBuf>,
+    /// Detections CSV output.
+    pub csv: Option<PathBuf>,
+    /// Summary CSV output.
+    pub summary: Option<PathBuf>,
+    /// Segments PLY output (one per input; see [`segments_path`]).
+    pub segments: Option<PathBuf>,
+    /// Scene-level numbers.
+    pub config: DetectConfig,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
+/// Loads the agent scaled to `height` and the hierarchy resolved against it.
+pub fn load_models(
+    agent: &Path,
+    affordances: &Path,
+    height: f64,
+) -> Result<(Agent, Hierarchy), ModelError> {
+    let a = Agent::load(agent, height)?;
+    let h = Hierarchy::load(affordances, &a)?;
+    Ok((a, h))
+}
+
+/// Detects in one file.
+pub fn detect_file(
+    path: &Path,
+    agent: &Agent,
+    h: &Hierarchy,
+    cfg: &DetectConfig,
+) -> Result<FileReport, cloud::CloudError> {
+    let loaded = cloud::load(path)?;
+    let outcome = detect(&loaded.cloud, agent, h, cfg);
+    Ok(FileReport {
+        file: path.display().to_string(),
+        height: agent.height,
+        agent: agent.name.clone(),
+        ids: h.ids().into_iter().map(String::from).collect(),
+        outcome,
+        dropped_non_finite: loaded.dropped_non_finite,
+    })
+}
+
+/// Where the segments of `input` go: `base` itself for a single input, otherwise
+/// `base` with the input's stem inserted before the extension (`seg.chair.ply`).
+pub fn segments_path(base: &Path, input: &Path, several: bool) -> PathBuf {
+    if !several {
+        return base.to_path_buf();
+    }
+    let stem = base
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let inp = input
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    base.with_file_name(format!("{stem}.{inp}.ply"))
+}
+
+/// Runs `afford detect`; returns the process exit code (0 all files done, 2 any failure).
+/// Results go to `out` (the table, when no output file is asked for), diagnostics to `err`.
+pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    let (agent, h) = match load_models(&req.agent, &req.affordances, req.height) {
+        Ok(m) => m,
+        Err(e) => {
+            let _ = writeln!(err, "error: {e}");
+            return 2;
+        }
+    };
+    let several = req.files.len() > 1;
+    let bar = if req.quiet || !several {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(req.files.len() as u64)
+    };
+    let mut reports = Vec::new();
+    let mut failed = 0usize;
+    for path in &req.files {
+        bar.set_message(path.display().to_string());
+        match detect_file(path, &agent, &h, &req.config) {
+            Ok(r) => {
+                if r.dropped_non_finite > 0 {
+                    let _ = bar.suspend(|| {
+                        writeln!(
+                            err,
+                            "warning: {}: dropped {} points with non-finite coordinates",
+                            path.display(),
+                            r.dropped_non_finite
+                        )
+                    });
+                }
+                if let Some(base) = &req.segments {
+                    let target = segments_path(base, path, several);
+                    if let Err(e) = write_segments(path, &target, &r) {
+                        let _ = bar.suspend(|| writeln!(err, "error: {e}"));
+                        failed += 1;
+                    }
+                }
+                reports.push(r);
+            }
+            Err(e) => {
+                let _ = bar.suspend(|| writeln!(err, "error: {e}"));
+                failed += 1;
+            }
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let mut write = |target: &Option<PathBuf>, text: Result<String, csv::Error>| {
+        if let Some(p) = target {
+            let done = text
+                .map_err(|e| e.to_string())
+                .and_then(|t| report::write_atomic(p, t.as_bytes()).map_err(|e| e.to_string()));
+            if let Err(e) = done {
+                let _ = writeln!(err, "error: {}: cannot write: {e}", p.display());
+                failed += 1;
+            }
+        }
+    };
+    write(&req.json, Ok(report::to_json(&reports)));
+    write(&req.csv, report::to_csv(&reports));
+    write(&req.summary, report::to_summary(&reports));
+    if req.json.is_none() && req.csv.is_none() && req.summary.is_none() {
+        for r in &reports {
+            let _ = out.write_all(report::to_table(r).as_bytes());
+        }
+    }
+    if several {
+        let _ = writeln!(err, "{} files, {} failed", req.files.len(), failed);
+    }
+    if failed > 0 {
+        2
+    } else {
+        0
+    }
+}
+
+/// Writes the input cloud again with the per-point detection index (-1 for none).
+fn write_segments(input: &Path, target: &Path, r: &FileReport) -> Result<(), cloud::CloudError> {
+    let loaded = cloud::load(input)?;
+    let labels: Vec<f64> = r
+        .outcome
+        .labels
+        .iter()
+        .map(|l| l.map_or(-1.0, |i| i as f64))
+        .collect();
+    cloud::write_ply_points(target, &loaded.cloud.points, &[("detection", labels)], true)
+}
