@@ -4,7 +4,7 @@
 use nalgebra::Point3;
 use rayon::prelude::*;
 
-use crate::agent::Agent;
+use crate::agent::{Agent, Cylinder};
 use crate::cloud::PointCloud;
 use crate::fit::{fit, ContactConfig};
 use crate::heightmap::HeightMap;
@@ -81,6 +81,8 @@ pub struct Detection {
     pub availability: f64,
     /// Number of points in the segment grown from the detection.
     pub segment_points: usize,
+    /// The posed body parts of the goal pose, world frame (for pictures and meshes).
+    pub parts: Vec<Cylinder>,
 }
 
 /// Everything one run over one cloud produced.
@@ -251,5 +253,6 @@ fn to_detection(agent: &Agent, h: &Hierarchy, hyp: &Hypothesis, u: &Unfolded) ->
         stability: u.stability,
         availability: hyp.availability,
         segment_points: 0,
+        parts: agent.cylinders(&frames, |_| true),
     }
 }
