@@ -78,6 +78,9 @@ pub struct ScoreRule {
     pub sigma_theta: f64,
     /// epsilon of Eq. 3: the local score of a link without contact.
     pub epsilon: f64,
+    /// Cosine of the largest angle between a contact's normal and a node's `release`
+    /// direction for the contact to count as support.
+    pub support_cos: f64,
 }
 
 /// One joint constraint (theta1, theta2, theta_d, axis, joint) of J_F.
@@ -108,6 +111,37 @@ pub struct Node {
     pub links: Vec<usize>,
     /// J_F: the joints swept.
     pub sweeps: Vec<Sweep>,
+    /// Joints held at each of several angles in turn while J_F is swept (an extension of
+    /// the paper: the arm looks for an armrest at several abductions); each kinematic
+    /// branch keeps the setting that scores best.
+    pub spreads: Vec<Spread>,
+    /// Joints held within a range while this node is judged (an extension of the paper:
+    /// a headrest is judged at a plausible trunk recline); kept when the node is found.
+    pub clamps: Vec<Clamp>,
+    /// When set, a contact counts only if the scene holds the touching links from the side
+    /// opposite this direction (agent frame: x forward, z up): `[0, 0, 1]` means "from
+    /// below", so an armrest counts and a wall beside the arm does not.
+    pub release: Option<nalgebra::Vector3<f64>>,
+}
+
+/// A joint held within `[lower, upper]` (radians) while a node is judged.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Clamp {
+    /// Joint index in the agent.
+    pub joint: usize,
+    /// Lowest angle, radians.
+    pub lower: f64,
+    /// Highest angle, radians.
+    pub upper: f64,
+}
+
+/// A joint tried at several fixed angles (radians) during a node's sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Spread {
+    /// Joint index in the agent.
+    pub joint: usize,
+    /// Angles tried, radians, in order (the first is kept when nothing is touched).
+    pub angles: Vec<f64>,
 }
 
 /// A whole affordance hierarchy resolved against an agent.
@@ -164,6 +198,7 @@ struct FitFile {
 struct ScoreFile {
     sigma_theta: f64,
     epsilon: f64,
+    support_angle: f64,
 }
 
 #[derive(Deserialize)]
@@ -176,6 +211,27 @@ struct NodeFile {
     when: bool,
     links: Vec<String>,
     sweep: Vec<SweepFile>,
+    #[serde(default)]
+    spread: Vec<SpreadFile>,
+    #[serde(default)]
+    clamp: Vec<ClampFile>,
+    #[serde(default)]
+    release: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ClampFile {
+    joint: String,
+    lower: f64,
+    upper: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SpreadFile {
+    joint: String,
+    angles: Vec<f64>,
 }
 
 fn yes() -> bool {
@@ -372,12 +428,62 @@ impl Hierarchy {
                     "a node needs at least one joint sweep",
                 ));
             }
+            let mut spreads = Vec::new();
+            for sp in &n.spread {
+                let j = joint(key("spread.joint"), &sp.joint)?;
+                if sp.angles.is_empty() || sp.angles.iter().any(|a| !a.is_finite()) {
+                    return Err(invalid(
+                        path,
+                        key(&format!("spread.{}.angles", sp.joint)),
+                        "needs finite angles",
+                    ));
+                }
+                if sweeps.iter().any(|s| s.joint == j) {
+                    return Err(invalid(
+                        path,
+                        key(&format!("spread.{}", sp.joint)),
+                        "a joint cannot be both swept and spread",
+                    ));
+                }
+                spreads.push(Spread {
+                    joint: j,
+                    angles: sp.angles.iter().map(|a| a.to_radians()).collect(),
+                });
+            }
+            let mut clamps = Vec::new();
+            for c in &n.clamp {
+                let j = joint(key("clamp.joint"), &c.joint)?;
+                if !(c.lower.is_finite() && c.upper.is_finite()) || c.lower > c.upper {
+                    return Err(invalid(
+                        path,
+                        key(&format!("clamp.{}", c.joint)),
+                        "lower must not exceed upper",
+                    ));
+                }
+                clamps.push(Clamp {
+                    joint: j,
+                    lower: c.lower.to_radians(),
+                    upper: c.upper.to_radians(),
+                });
+            }
             nodes.push(Node {
                 id: n.id.clone(),
                 parent: n.parent.as_ref().map(|p| new_index[&ids[p.as_str()]]),
                 when: n.when,
                 links,
                 sweeps,
+                spreads,
+                clamps,
+                release: match n.release.map(Vector3::from) {
+                    Some(r) if r.norm().is_nan() || r.norm() <= 1e-9 => {
+                        return Err(invalid(
+                            path,
+                            key("release"),
+                            "must be a non-zero direction",
+                        ))
+                    }
+                    r => r,
+                },
             });
         }
         let f = &file.fit;
@@ -399,6 +505,7 @@ impl Hierarchy {
             score: ScoreRule {
                 sigma_theta: file.score.sigma_theta.to_radians(),
                 epsilon: file.score.epsilon,
+                support_cos: file.score.support_angle.to_radians().cos(),
             },
             suppression_radius: file.suppression_radius,
             initial,

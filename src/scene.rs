@@ -188,6 +188,47 @@ impl Scene {
             .unwrap_or(false)
     }
 
+    /// The direction (unit, world) in which the scene falls away from the body part `c` where
+    /// it comes closest to it: the gradient of the distance field at the axis point nearest
+    /// to an occupied voxel. For a forearm lying on an armrest it points up; for one
+    /// touching a wall beside it, sideways. `None` with no voxels nearby (or only the floor,
+    /// whose normal is +z).
+    pub fn contact_normal(&self, c: &Cylinder) -> Option<Vector3<f64>> {
+        if self.floor && floor_gap(c) <= self.voxel {
+            return Some(Vector3::z());
+        }
+        let field = self.field.as_ref()?;
+        let v = self.voxel;
+        let key = |p: &Point3<f64>| {
+            let l = (p.coords - self.origin) / v;
+            [l.x.floor() as i64, l.y.floor() as i64, l.z.floor() as i64]
+        };
+        let axis = c.b - c.a;
+        let n = ((axis.norm() / v).ceil() as usize).max(1);
+        let (mut best, mut at) = (f32::INFINITY, None);
+        for i in 0..=n {
+            let p = c.a + axis * (i as f64 / n as f64);
+            if let Some(d) = field.get(key(&p)) {
+                if d < best {
+                    best = d;
+                    at = Some(key(&p));
+                }
+            }
+        }
+        let k = at?;
+        let g = |a: usize| {
+            let (mut lo, mut hi) = (k, k);
+            lo[a] -= 2;
+            hi[a] += 2;
+            match (field.get(lo), field.get(hi)) {
+                (Some(l), Some(h)) if l.is_finite() && h.is_finite() => (h - l) as f64,
+                _ => 0.0,
+            }
+        };
+        let grad = Vector3::new(g(0), g(1), g(2));
+        (grad.norm() > 1e-9).then(|| grad.normalize())
+    }
+
     /// Distance (metres, >= 0) from the surface of a body part of radius `radius` whose axis
     /// passes through `p` to the nearest voxel or the floor: the d_i of Eq. 1.
     pub fn surface_distance(&self, p: &Point3<f64>, radius: f64) -> f64 {

@@ -114,6 +114,10 @@ fn unfold_node(
     node: &Node,
     contact: &ContactConfig,
 ) -> (bool, f64) {
+    let before = posture.clone();
+    for c in &node.clamps {
+        posture.angles[c.joint] = posture.angles[c.joint].clamp(c.lower, c.upper);
+    }
     for s in &node.sweeps {
         posture.angles[s.joint] = s.theta1;
         posture.axes[s.joint] = s.axis;
@@ -131,44 +135,122 @@ fn unfold_node(
                     .any(|&s| agent.is_descendant(l, node.sweeps[s].joint))
             })
             .collect();
-        let speed: f64 = branch
+        // The spread joints that move this branch's links; each of their angles is tried.
+        let spreads: Vec<&crate::hierarchy::Spread> = node
+            .spreads
             .iter()
-            .map(|&s| {
-                let sw = &node.sweeps[s];
-                (sw.theta2 - sw.theta1) * agent.reach(sw.joint)
-            })
-            .sum();
-        let base = posture.clone();
-        let mut frames = Vec::new();
-        let mut motion = |t: f64, out: &mut Vec<Cylinder>| {
-            let mut p = base.clone();
-            for &s in &branch {
-                let sw = &node.sweeps[s];
-                p.angles[sw.joint] = sw.theta1 + t * (sw.theta2 - sw.theta1);
+            .filter(|sp| links.iter().any(|&l| agent.is_descendant(l, sp.joint)))
+            .collect();
+        let settings = spreads.iter().map(|sp| sp.angles.len()).max().unwrap_or(1);
+        let mut best: Option<(Option<f64>, f64, Posture)> = None;
+        for k in 0..settings {
+            let mut trial = posture.clone();
+            for sp in &spreads {
+                trial.angles[sp.joint] = sp.angles[k.min(sp.angles.len() - 1)];
             }
-            agent.forward_kinematics(place, &p, &mut frames);
-            *out = agent.cylinders(&frames, |j| links.contains(&j));
-        };
-        let hit = scene.first_contact(&mut motion, speed.max(1e-9), contact.resolution);
-        let mut sq = 0.0;
-        for &s in &branch {
-            let sw = &node.sweeps[s];
-            // Eq. 2: theta_c on contact, theta_d otherwise.
-            let theta = match hit {
-                Some(t) => sw.theta1 + t * (sw.theta2 - sw.theta1),
-                None => sw.thetad,
+            let (hit, r) = sweep_branch(
+                agent, h, scene, place, &mut trial, node, &branch, &links, contact,
+            );
+            let better = match &best {
+                None => true,
+                Some((bh, br, _)) => {
+                    (hit.is_some() && bh.is_none()) || (hit.is_some() == bh.is_some() && r > *br)
+                }
             };
-            posture.angles[sw.joint] = theta;
-            sq += (sw.thetad - theta).powi(2);
+            if better {
+                best = Some((hit, r, trial));
+            }
         }
-        let sq = sq / branch.len() as f64;
-        found |= hit.is_some();
-        local = t_norm(
-            local,
-            local_score(hit.map(|_| sq), h.score.sigma_theta, h.score.epsilon),
-        );
+        if let Some((hit, r, trial)) = best {
+            for &s in &branch {
+                let j = node.sweeps[s].joint;
+                posture.angles[j] = trial.angles[j];
+            }
+            for sp in &spreads {
+                posture.angles[sp.joint] = trial.angles[sp.joint];
+            }
+            found |= hit.is_some();
+            local = t_norm(local, r);
+        }
+    }
+    if !found {
+        for c in &node.clamps {
+            posture.angles[c.joint] = before.angles[c.joint];
+        }
     }
     (found, local)
+}
+
+/// Sweeps one kinematic branch of a node from theta1 towards theta2, stopping at the
+/// first contact of its links; writes Eq. 2's angles into `posture` and returns the
+/// contact parameter and the branch's local score (Eq. 3).
+#[allow(clippy::too_many_arguments)]
+fn sweep_branch(
+    agent: &Agent,
+    h: &Hierarchy,
+    scene: &Scene,
+    place: &Placement,
+    posture: &mut Posture,
+    node: &Node,
+    branch: &[usize],
+    links: &[usize],
+    contact: &ContactConfig,
+) -> (Option<f64>, f64) {
+    let speed: f64 = branch
+        .iter()
+        .map(|&s| {
+            let sw = &node.sweeps[s];
+            (sw.theta2 - sw.theta1) * agent.reach(sw.joint)
+        })
+        .sum();
+    let base = posture.clone();
+    let mut frames = Vec::new();
+    let mut motion = |t: f64, out: &mut Vec<Cylinder>| {
+        let mut p = base.clone();
+        for &s in branch {
+            let sw = &node.sweeps[s];
+            p.angles[sw.joint] = sw.theta1 + t * (sw.theta2 - sw.theta1);
+        }
+        agent.forward_kinematics(place, &p, &mut frames);
+        *out = agent.cylinders(&frames, |j| links.contains(&j));
+    };
+    let mut hit = scene.first_contact(&mut motion, speed.max(1e-9), contact.resolution);
+    let mut blocked = None;
+    if let (Some(t), Some(release)) = (hit, node.release) {
+        let mut parts = Vec::new();
+        motion(t, &mut parts);
+        let dir = (nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::z_axis(), place.yaw)
+            * release)
+            .normalize();
+        // The parts in contact must be held from the side opposite `release`.
+        let supported = parts
+            .iter()
+            .filter(|c| scene.clearance(c) <= 0.0 && scene.intersects(c))
+            .all(|c| {
+                scene
+                    .contact_normal(c)
+                    .is_some_and(|n| n.dot(&dir) >= h.score.support_cos)
+            });
+        if !supported {
+            blocked = hit.take();
+        }
+    }
+    let mut sq = 0.0;
+    for &s in branch {
+        let sw = &node.sweeps[s];
+        // Eq. 2: theta_c on contact, theta_d otherwise.
+        let theta = match hit.or(blocked) {
+            Some(t) => sw.theta1 + t * (sw.theta2 - sw.theta1),
+            None => sw.thetad,
+        };
+        posture.angles[sw.joint] = theta;
+        sq += (sw.thetad - theta).powi(2);
+    }
+    let sq = sq / branch.len() as f64;
+    (
+        hit,
+        local_score(hit.map(|_| sq), h.score.sigma_theta, h.score.epsilon),
+    )
 }
 
 /// Groups a node's sweeps (by index) into kinematic branches: sweeps that move a common
