@@ -109,6 +109,9 @@ pub struct Node {
     pub when: bool,
     /// E_F: the links (joint indices) checked for contact.
     pub links: Vec<usize>,
+    /// For each link of `links`, the part checked, as fractions `[from, to]` of its length
+    /// (an armrest carries the forearm near the elbow, not at the wrist).
+    pub spans: Vec<[f64; 2]>,
     /// J_F: the joints swept.
     pub sweeps: Vec<Sweep>,
     /// Joints held at each of several angles in turn while J_F is swept (an extension of
@@ -209,7 +212,7 @@ struct NodeFile {
     parent: Option<String>,
     #[serde(default = "yes")]
     when: bool,
-    links: Vec<String>,
+    links: Vec<LinkRef>,
     sweep: Vec<SweepFile>,
     #[serde(default)]
     spread: Vec<SpreadFile>,
@@ -225,6 +228,14 @@ struct ClampFile {
     joint: String,
     lower: f64,
     upper: f64,
+}
+
+/// A link of E_F: its name, or its name and the span checked.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum LinkRef {
+    Name(String),
+    Span { link: String, span: [f64; 2] },
 }
 
 #[derive(Deserialize)]
@@ -374,11 +385,26 @@ impl Hierarchy {
         for &i in &order {
             let n = &file.node[i];
             let key = |k: &str| format!("node.{}.{k}", n.id);
-            let links = n
-                .links
-                .iter()
-                .map(|l| link(key("links"), l))
-                .collect::<Result<Vec<_>, _>>()?;
+            let mut links = Vec::new();
+            let mut spans = Vec::new();
+            for l in &n.links {
+                let (name, span) = match l {
+                    LinkRef::Name(name) => (name, [0.0, 1.0]),
+                    LinkRef::Span { link, span } => (link, *span),
+                };
+                if !(0.0..=1.0).contains(&span[0])
+                    || !(0.0..=1.0).contains(&span[1])
+                    || span[0] >= span[1]
+                {
+                    return Err(invalid(
+                        path,
+                        key(&format!("links.{name}.span")),
+                        "needs 0 <= from < to <= 1",
+                    ));
+                }
+                links.push(link(key("links"), name)?);
+                spans.push(span);
+            }
             if links.is_empty() {
                 return Err(invalid(
                     path,
@@ -471,6 +497,7 @@ impl Hierarchy {
                 parent: n.parent.as_ref().map(|p| new_index[&ids[p.as_str()]]),
                 when: n.when,
                 links,
+                spans,
                 sweeps,
                 spreads,
                 clamps,

@@ -213,6 +213,14 @@ fn sweep_branch(
         }
         agent.forward_kinematics(place, &p, &mut frames);
         *out = agent.cylinders(&frames, |j| links.contains(&j));
+        for c in out.iter_mut() {
+            if let Some(k) = node.links.iter().position(|&l| l == c.joint) {
+                let [s0, s1] = node.spans[k];
+                let (a, d) = (c.a, c.b - c.a);
+                c.a = a + d * s0;
+                c.b = a + d * s1;
+            }
+        }
     };
     let mut hit = scene.first_contact(&mut motion, speed.max(1e-9), contact.resolution);
     let mut blocked = None;
