@@ -10,6 +10,7 @@
 //! [`scene::Scene`] → [`fit::fit`] → [`unfold::unfold`] → [`select`] → [`report`].
 
 pub mod agent;
+pub mod agent_mesh;
 pub mod cloud;
 pub mod detect;
 pub mod fit;
@@ -18,6 +19,7 @@ pub mod heightmap;
 pub mod hierarchy;
 pub mod hypotheses;
 pub mod model;
+pub mod render;
 pub mod report;
 pub mod run;
 pub mod scene;

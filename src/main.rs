@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use afford::detect::DetectConfig;
-use afford::run::{run_detect, DetectRequest};
+use afford::run::{run_detect, run_inspect, DetectRequest, InspectRequest};
 use clap::{Parser, Subcommand};
 
 /// Finds where a person could sit or lie in a 3D point cloud, and how.
@@ -19,6 +19,35 @@ struct Cli {
 enum Command {
     /// Detect fine-grained affordances in point clouds (PLY, PCD, XYZ).
     Detect(DetectArgs),
+    /// Draw the height map, the hypotheses and the posed agents of one cloud as a PNG.
+    Inspect(InspectArgs),
+}
+
+#[derive(clap::Args)]
+struct ModelArgs {
+    /// Agent model [default: the built-in agents/human.toml].
+    #[arg(long)]
+    agent: Option<PathBuf>,
+    /// Affordance hierarchy [default: the built-in affordances/sitting.toml].
+    #[arg(long)]
+    affordances: Option<PathBuf>,
+    /// Body height of the agent, metres (0.3 to 3.0).
+    #[arg(long, default_value_t = 1.75, value_parser = parse_height)]
+    height: f64,
+    /// Voxel edge length of the scene, metres.
+    #[arg(long, value_parser = parse_voxel)]
+    voxel: Option<f64>,
+}
+
+#[derive(clap::Args)]
+struct InspectArgs {
+    /// Point cloud file (metres, z up, floor at z = 0).
+    file: PathBuf,
+    /// Where to write the picture.
+    #[arg(long)]
+    png: PathBuf,
+    #[command(flatten)]
+    models: ModelArgs,
 }
 
 #[derive(clap::Args)]
@@ -26,15 +55,8 @@ struct DetectArgs {
     /// Point cloud files (metres, z up, floor at z = 0).
     #[arg(required = true)]
     files: Vec<PathBuf>,
-    /// Agent model.
-    #[arg(long, default_value = "agents/human.toml")]
-    agent: PathBuf,
-    /// Affordance hierarchy.
-    #[arg(long, default_value = "affordances/sitting.toml")]
-    affordances: PathBuf,
-    /// Body height of the agent, metres.
-    #[arg(long, default_value_t = 1.75)]
-    height: f64,
+    #[command(flatten)]
+    models: ModelArgs,
     /// Write detections as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -47,29 +69,49 @@ struct DetectArgs {
     /// Write the segmented points as PLY with a per-point detection index.
     #[arg(long)]
     segments: Option<PathBuf>,
+    /// Write the posed agents as a coloured triangle mesh (PLY).
+    #[arg(long)]
+    mesh: Option<PathBuf>,
     /// Worker threads (default: all cores); the output does not depend on it.
     #[arg(long)]
     threads: Option<usize>,
-    /// Voxel edge length of the scene, metres.
-    #[arg(long)]
-    voxel: Option<f64>,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+}
+
+fn parse_height(s: &str) -> Result<f64, String> {
+    let h: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if h.is_finite() && (0.3..=3.0).contains(&h) {
+        Ok(h)
+    } else {
+        Err(format!(
+            "body height {h} m is outside 0.3-3.0 m (metres, not centimetres?)"
+        ))
+    }
+}
+
+fn parse_voxel(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if v.is_finite() && (0.002..=0.1).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("voxel size {v} m is outside 0.002-0.1 m"))
+    }
+}
+
+fn config(m: &ModelArgs) -> DetectConfig {
+    let mut config = DetectConfig::default();
+    if let Some(v) = m.voxel {
+        config.scene.voxel_size = v;
+    }
+    config
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Detect(a) => {
-            let mut config = DetectConfig::default();
-            if let Some(v) = a.voxel {
-                if !(v.is_finite() && v > 0.001 && v <= 0.1) {
-                    eprintln!("error: --voxel {v}: must be between 0.001 and 0.1 m");
-                    return ExitCode::from(2);
-                }
-                config.scene.voxel_size = v;
-            }
             if let Some(n) = a.threads {
                 if let Err(e) = rayon::ThreadPoolBuilder::new()
                     .num_threads(n)
@@ -81,17 +123,34 @@ fn main() -> ExitCode {
             }
             let req = DetectRequest {
                 files: a.files,
-                agent: a.agent,
-                affordances: a.affordances,
-                height: a.height,
+                agent: a.models.agent.clone(),
+                affordances: a.models.affordances.clone(),
+                height: a.models.height,
                 json: a.json,
                 csv: a.csv,
                 summary: a.summary,
                 segments: a.segments,
-                config,
+                mesh: a.mesh,
+                config: config(&a.models),
                 quiet: a.quiet,
             };
             let code = run_detect(
+                &req,
+                &mut std::io::stdout().lock(),
+                &mut std::io::stderr().lock(),
+            );
+            ExitCode::from(code as u8)
+        }
+        Command::Inspect(a) => {
+            let req = InspectRequest {
+                file: a.file,
+                agent: a.models.agent.clone(),
+                affordances: a.models.affordances.clone(),
+                height: a.models.height,
+                png: a.png,
+                config: config(&a.models),
+            };
+            let code = run_inspect(
                 &req,
                 &mut std::io::stdout().lock(),
                 &mut std::io::stderr().lock(),

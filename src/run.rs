@@ -16,10 +16,10 @@ use crate::report::{self, FileReport};
 pub struct DetectRequest {
     /// Input clouds.
     pub files: Vec<PathBuf>,
-    /// Agent model file.
-    pub agent: PathBuf,
-    /// Hierarchy file.
-    pub affordances: PathBuf,
+    /// Agent model file; `None` for the built-in `agents/human.toml`.
+    pub agent: Option<PathBuf>,
+    /// Hierarchy file; `None` for the built-in `affordances/sitting.toml`.
+    pub affordances: Option<PathBuf>,
     /// Body height, metres.
     pub height: f64,
     /// JSON output.
@@ -28,8 +28,10 @@ pub struct DetectRequest {
     pub csv: Option<PathBuf>,
     /// Summary CSV output.
     pub summary: Option<PathBuf>,
-    /// Segments PLY output (one per input; see [`segments_path`]).
+    /// Segments PLY output (one per input; see [`per_input_path`]).
     pub segments: Option<PathBuf>,
+    /// Posed-agent mesh PLY output (one per input; see [`per_input_path`]).
+    pub mesh: Option<PathBuf>,
     /// Scene-level numbers.
     pub config: DetectConfig,
     /// No progress bar.
@@ -44,6 +46,36 @@ pub fn load_models(
 ) -> Result<(Agent, Hierarchy), ModelError> {
     let a = Agent::load(agent, height)?;
     let h = Hierarchy::load(affordances, &a)?;
+    Ok((a, h))
+}
+
+/// The agent model compiled into the binary (`agents/human.toml`).
+pub const BUILTIN_AGENT: &str = include_str!("../agents/human.toml");
+/// The sitting hierarchy compiled into the binary (`affordances/sitting.toml`).
+pub const BUILTIN_SITTING: &str = include_str!("../affordances/sitting.toml");
+
+/// Like [`load_models`], with the built-in models where no file is given.
+pub fn load_models_or_builtin(
+    agent: Option<&Path>,
+    affordances: Option<&Path>,
+    height: f64,
+) -> Result<(Agent, Hierarchy), ModelError> {
+    let a = match agent {
+        Some(p) => Agent::load(p, height)?,
+        None => Agent::from_toml(
+            BUILTIN_AGENT,
+            Path::new("(built-in) agents/human.toml"),
+            height,
+        )?,
+    };
+    let h = match affordances {
+        Some(p) => Hierarchy::load(p, &a)?,
+        None => Hierarchy::from_toml(
+            BUILTIN_SITTING,
+            Path::new("(built-in) affordances/sitting.toml"),
+            &a,
+        )?,
+    };
     Ok((a, h))
 }
 
@@ -66,9 +98,9 @@ pub fn detect_file(
     })
 }
 
-/// Where the segments of `input` go: `base` itself for a single input, otherwise
+/// Where a per-input output of `input` goes: `base` itself for a single input, otherwise
 /// `base` with the input's stem inserted before the extension (`seg.chair.ply`).
-pub fn segments_path(base: &Path, input: &Path, several: bool) -> PathBuf {
+pub fn per_input_path(base: &Path, input: &Path, several: bool) -> PathBuf {
     if !several {
         return base.to_path_buf();
     }
@@ -86,7 +118,11 @@ pub fn segments_path(base: &Path, input: &Path, several: bool) -> PathBuf {
 /// Runs `afford detect`; returns the process exit code (0 all files done, 2 any failure).
 /// Results go to `out` (the table, when no output file is asked for), diagnostics to `err`.
 pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
-    let (agent, h) = match load_models(&req.agent, &req.affordances, req.height) {
+    let (agent, h) = match load_models_or_builtin(
+        req.agent.as_deref(),
+        req.affordances.as_deref(),
+        req.height,
+    ) {
         Ok(m) => m,
         Err(e) => {
             let _ = writeln!(err, "error: {e}");
@@ -116,9 +152,20 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
                     });
                 }
                 if let Some(base) = &req.segments {
-                    let target = segments_path(base, path, several);
+                    let target = per_input_path(base, path, several);
                     if let Err(e) = write_segments(path, &target, &r) {
                         let _ = bar.suspend(|| writeln!(err, "error: {e}"));
+                        failed += 1;
+                    }
+                }
+                if let Some(base) = &req.mesh {
+                    let target = per_input_path(base, path, several);
+                    if let Err(e) =
+                        crate::agent_mesh::agent_mesh_ply(&r.outcome.detections, &target)
+                    {
+                        let _ = bar.suspend(|| {
+                            writeln!(err, "error: {}: cannot write: {e}", target.display())
+                        });
                         failed += 1;
                     }
                 }
@@ -171,4 +218,70 @@ fn write_segments(input: &Path, target: &Path, r: &FileReport) -> Result<(), clo
         .map(|l| l.map_or(-1.0, |i| i as f64))
         .collect();
     cloud::write_ply_points(target, &loaded.cloud.points, &[("detection", labels)], true)
+}
+
+/// Everything `afford inspect` was asked to do.
+#[derive(Debug, Clone)]
+pub struct InspectRequest {
+    /// The input cloud.
+    pub file: PathBuf,
+    /// Agent model file; `None` for the built-in one.
+    pub agent: Option<PathBuf>,
+    /// Hierarchy file; `None` for the built-in sitting hierarchy.
+    pub affordances: Option<PathBuf>,
+    /// Body height, metres.
+    pub height: f64,
+    /// The picture to write.
+    pub png: PathBuf,
+    /// Scene-level numbers.
+    pub config: DetectConfig,
+}
+
+/// Runs `afford inspect`: detection on one file and a picture of the height map with its
+/// hypotheses and detections (the paper's Fig. 4 b-d) beside views of the posed agents.
+/// Returns the exit code (0 done, 2 error).
+pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    let (agent, h) = match load_models_or_builtin(
+        req.agent.as_deref(),
+        req.affordances.as_deref(),
+        req.height,
+    ) {
+        Ok(m) => m,
+        Err(e) => {
+            let _ = writeln!(err, "error: {e}");
+            return 2;
+        }
+    };
+    let loaded = match cloud::load(&req.file) {
+        Ok(l) => l,
+        Err(e) => {
+            let _ = writeln!(err, "error: {e}");
+            return 2;
+        }
+    };
+    let prepared = crate::detect::prepare(&loaded.cloud, &req.config);
+    let hyps =
+        crate::hypotheses::hypotheses(&prepared.map, &h.hypothesis, h.orientation, agent.height);
+    let outcome = crate::detect::detect_prepared(&loaded.cloud, &prepared, &agent, &h, &req.config);
+    if let Err(e) = crate::render::inspect_png(&loaded.cloud, &prepared, &hyps, &outcome, &req.png)
+    {
+        let _ = writeln!(err, "error: {}: cannot write: {e}", req.png.display());
+        return 2;
+    }
+    let r = FileReport {
+        file: req.file.display().to_string(),
+        height: agent.height,
+        agent: agent.name.clone(),
+        ids: h.ids().into_iter().map(String::from).collect(),
+        outcome,
+        dropped_non_finite: loaded.dropped_non_finite,
+    };
+    let _ = out.write_all(report::to_table(&r).as_bytes());
+    let _ = writeln!(
+        out,
+        "{} hypotheses drawn in {}",
+        hyps.len(),
+        req.png.display()
+    );
+    0
 }

@@ -1,0 +1,223 @@
+//! The `afford` command line as a user runs it: outputs, exit codes and one-line errors.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn afford(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_afford"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+const SAMPLE: &str = "data/sample/room.ply";
+
+fn tmp() -> tempfile::TempDir {
+    tempfile::tempdir().unwrap()
+}
+
+fn p(dir: &Path, name: &str) -> String {
+    dir.join(name).display().to_string()
+}
+
+#[test]
+fn the_sample_prints_a_table_of_detections() {
+    let o = afford(&["detect", SAMPLE]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    assert!(out.contains("affords: sitting, armrest, backrest"), "{out}");
+    assert_eq!(
+        out.lines()
+            .filter(|l| l.trim_start().starts_with('#'))
+            .count(),
+        3,
+        "{out}"
+    );
+}
+
+#[test]
+fn outputs_follow_the_interfaces_and_do_not_depend_on_threads() {
+    let d = tmp();
+    let run = |threads: &str, tag: &str| {
+        let o = afford(&[
+            "detect",
+            SAMPLE,
+            "--threads",
+            threads,
+            "--json",
+            &p(d.path(), &format!("{tag}.json")),
+            "--csv",
+            &p(d.path(), &format!("{tag}.csv")),
+            "--summary",
+            &p(d.path(), &format!("{tag}-summary.csv")),
+        ]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+    };
+    run("1", "one");
+    run("2", "two");
+    for f in ["json", "csv"] {
+        let a = std::fs::read(d.path().join(format!("one.{f}"))).unwrap();
+        let b = std::fs::read(d.path().join(format!("two.{f}"))).unwrap();
+        assert_eq!(a, b, "{f} differs between 1 and 2 threads");
+    }
+    let csv = std::fs::read_to_string(d.path().join("one.csv")).unwrap();
+    assert_eq!(
+        csv.lines().next().unwrap(),
+        "file,detection,hierarchy,x,y,z,yaw_deg,score,stability,affordances,segment_points"
+    );
+    assert_eq!(csv.lines().count(), 4);
+    assert!(csv.contains("sitting;armrest;backrest"), "{csv}");
+    let summary = std::fs::read_to_string(d.path().join("one-summary.csv")).unwrap();
+    assert_eq!(
+        summary,
+        format!("file,sitting,armrest,backrest,headrest\n{SAMPLE},1,1,1,0\n")
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.path().join("one.json")).unwrap()).unwrap();
+    let det = &json["files"][0]["detections"][0];
+    assert!(det["pose_deg"]["knee_l"].as_f64().unwrap() > 50.0);
+    assert!(det["segment_points"].as_u64().unwrap() > 500);
+    // No temporary files are left behind.
+    let names: Vec<String> = std::fs::read_dir(d.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(names.iter().all(|n| !n.contains(".tmp-")), "{names:?}");
+}
+
+#[test]
+fn segments_carry_a_detection_index_per_point() {
+    let d = tmp();
+    let seg = p(d.path(), "seg.ply");
+    let o = afford(&[
+        "detect",
+        SAMPLE,
+        "--segments",
+        &seg,
+        "--summary",
+        &p(d.path(), "s.csv"),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let bytes = std::fs::read(&seg).unwrap();
+    let header = text(&bytes[..400.min(bytes.len())]);
+    assert!(header.contains("property float detection"), "{header}");
+    let n = afford::cloud::read_ply(Path::new(&seg)).unwrap().len();
+    let m = afford::cloud::read_ply(Path::new(SAMPLE)).unwrap().len();
+    assert_eq!(n, m);
+}
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let f = dir.join(name);
+    std::fs::write(&f, bytes).unwrap();
+    f
+}
+
+#[test]
+fn a_bad_file_gets_one_line_and_the_others_are_still_processed() {
+    let d = tmp();
+    let bad_header = write(
+        d.path(),
+        "bad.ply",
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 10\nproperty float x\nend_header\n",
+    );
+    let truncated = write(
+        d.path(),
+        "short.ply",
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 1000\nproperty float x\nproperty float y\nproperty float z\nend_header\n\0\0\0\0",
+    );
+    let missing = d.path().join("missing.pcd");
+    let summary = p(d.path(), "summary.csv");
+    let o = afford(&[
+        "detect",
+        "--quiet",
+        &bad_header.display().to_string(),
+        SAMPLE,
+        &truncated.display().to_string(),
+        &missing.display().to_string(),
+        "--summary",
+        &summary,
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = text(&o.stderr);
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(errors.len(), 3, "{err}");
+    assert!(
+        errors[0].contains("bad.ply") && errors[0].contains('y'),
+        "{}",
+        errors[0]
+    );
+    assert!(errors[1].contains("short.ply"), "{}", errors[1]);
+    assert!(errors[2].contains("missing.pcd"), "{}", errors[2]);
+    let s = std::fs::read_to_string(&summary).unwrap();
+    assert_eq!(s.lines().count(), 2, "the good file is summarised: {s}");
+    assert!(s.contains(SAMPLE));
+}
+
+#[test]
+fn an_empty_cloud_and_non_finite_points() {
+    let d = tmp();
+    let empty = write(d.path(), "empty.ply", b"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n");
+    let nan = write(
+        d.path(),
+        "nan.xyz",
+        b"0 0 0\nnan 1 1\n1 inf 2\n0.5 0.5 0.5\n",
+    );
+    let o = afford(&[
+        "detect",
+        &empty.display().to_string(),
+        &nan.display().to_string(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("nan.xyz: dropped 2 points with non-finite coordinates"),
+        "{err}"
+    );
+    assert!(text(&o.stdout)
+        .contains("empty.ply: 0 points, 0 hypotheses, 0 detections; affords: nothing"));
+}
+
+#[test]
+fn a_malformed_model_names_the_file_and_the_key() {
+    let d = tmp();
+    let h = std::fs::read_to_string("affordances/sitting.toml")
+        .unwrap()
+        .replace("sigma_theta", "sigma_teta");
+    let bad = write(d.path(), "bad.toml", h.as_bytes());
+    let o = afford(&[
+        "detect",
+        SAMPLE,
+        "--affordances",
+        &bad.display().to_string(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = text(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("bad.toml:") && err.contains("sigma_teta"),
+        "{err}"
+    );
+    let a = std::fs::read_to_string("agents/human.toml")
+        .unwrap()
+        .replace("parent = \"hip_l\"", "parent = \"hipl\"");
+    let bad = write(d.path(), "agent.toml", a.as_bytes());
+    let o = afford(&["detect", SAMPLE, "--agent", &bad.display().to_string()]);
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("agent.toml") && err.contains("knee_l.parent") && err.contains("hipl"),
+        "{err}"
+    );
+}
+
+#[test]
+fn body_heights_outside_reason_are_refused() {
+    let o = afford(&["detect", SAMPLE, "--height", "17.5"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("17.5"));
+}
