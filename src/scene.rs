@@ -329,50 +329,55 @@ fn floor_gap(c: &Cylinder) -> f64 {
 
 impl DistanceField {
     /// Exact Euclidean distance transform (Felzenszwalb and Huttenlocher, 2012) of the
-    /// occupied voxel `keys`, in metres.
+    /// occupied voxel `keys`, in metres. Lines along each axis are transformed in parallel;
+    /// the result is stored y-major (`(y * nz + z) * nx + x`), the layout the last pass
+    /// writes.
     fn new(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]], v: f64) -> DistanceField {
+        use rayon::prelude::*;
         const FAR: f32 = 1e20;
         let [nx, ny, nz] = dims;
+        // Squared distances in cells, z-major (`(z * ny + y) * nx + x`) for the first passes.
         let mut d = vec![FAR; nx * ny * nz];
         for k in keys {
-            let (x, y, z) = (
-                (k[0] - min[0]) as usize,
-                (k[1] - min[1]) as usize,
-                (k[2] - min[2]) as usize,
-            );
+            let (x, y, z) = ((k[0] - min[0]) as usize, (k[1] - min[1]) as usize, (k[2] - min[2]) as usize);
             d[(z * ny + y) * nx + x] = 0.0;
         }
         let longest = nx.max(ny).max(nz);
-        let mut f = vec![0f32; longest];
-        let mut out = vec![0f32; longest];
-        let mut vs = vec![0usize; longest];
-        let mut zs = vec![0f32; longest + 1];
-        // Along x, y, then z: squared distances in cells.
-        let strides = [1, nx, nx * ny];
-        for axis in 0..3 {
-            let n = dims[axis];
-            let stride = strides[axis];
-            let others: Vec<usize> = (0..nx * ny * nz)
-                .filter(|&i| (i / stride) % n == 0)
-                .collect();
-            for start in others {
-                for i in 0..n {
-                    f[i] = d[start + i * stride];
+        let scratch = || (vec![0f32; longest], vec![0f32; longest], vec![0usize; longest], vec![0f32; longest + 1]);
+        // Along x: rows are contiguous.
+        d.par_chunks_mut(nx).for_each_init(scratch, |(f, out, vs, zs), row| {
+            f[..nx].copy_from_slice(row);
+            edt_1d(&f[..nx], &mut out[..nx], vs, zs);
+            row.copy_from_slice(&out[..nx]);
+        });
+        // Along y: within each z slab.
+        d.par_chunks_mut(nx * ny).for_each_init(scratch, |(f, out, vs, zs), slab| {
+            for x in 0..nx {
+                for y in 0..ny {
+                    f[y] = slab[y * nx + x];
                 }
-                edt_1d(&f[..n], &mut out[..n], &mut vs, &mut zs);
-                for i in 0..n {
-                    d[start + i * stride] = out[i];
+                edt_1d(&f[..ny], &mut out[..ny], vs, zs);
+                for y in 0..ny {
+                    slab[y * nx + x] = out[y];
                 }
             }
-        }
-        for x in d.iter_mut() {
-            *x = if *x >= FAR / 2.0 {
-                f32::INFINITY
-            } else {
-                x.sqrt() * v as f32
-            };
-        }
-        DistanceField { min, dims, dist: d }
+        });
+        // Along z: read the z-major grid, write one y-major plane per y.
+        let src = &d;
+        let mut dist = vec![0f32; nx * ny * nz];
+        dist.par_chunks_mut(nx * nz).enumerate().for_each_init(scratch, |(f, out, vs, zs), (y, plane)| {
+            for x in 0..nx {
+                for z in 0..nz {
+                    f[z] = src[(z * ny + y) * nx + x];
+                }
+                edt_1d(&f[..nz], &mut out[..nz], vs, zs);
+                for z in 0..nz {
+                    let q = out[z];
+                    plane[z * nx + x] = if q >= FAR / 2.0 { f32::INFINITY } else { q.sqrt() * v as f32 };
+                }
+            }
+        });
+        DistanceField { min, dims, dist }
     }
 
     fn get(&self, k: [i64; 3]) -> Option<f32> {
@@ -384,7 +389,7 @@ impl DistanceField {
             }
             idx[a] = i as usize;
         }
-        Some(self.dist[(idx[2] * self.dims[1] + idx[1]) * self.dims[0] + idx[0]])
+        Some(self.dist[(idx[1] * self.dims[2] + idx[2]) * self.dims[0] + idx[0]])
     }
 }
 
