@@ -6,6 +6,7 @@
 //! floors (negatives) from them. World frame: metres, z up, floor at z = 0; seating
 //! furniture faces +x (the backrest is on the -x side).
 
+pub mod camera;
 pub mod furniture;
 pub mod mesh;
 
