@@ -7,8 +7,10 @@
 //! furniture faces +x (the backrest is on the -x side).
 
 pub mod camera;
+pub mod dataset;
 pub mod furniture;
 pub mod mesh;
+pub mod meshio;
 
 pub use furniture::*;
 pub use mesh::{sample_surface, Mesh, Part};
