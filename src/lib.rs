@@ -12,6 +12,7 @@
 pub mod agent;
 pub mod cloud;
 pub mod detect;
+pub mod eval;
 pub mod fit;
 pub mod fuzzy;
 pub mod heightmap;
