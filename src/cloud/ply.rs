@@ -795,7 +795,14 @@ pub fn read_ply_property(path: &Path, name: &str) -> Result<Option<Vec<f64>>, Cl
         Encoding::Ascii => read_ascii_body(path, &mut r, &header, vi, [pi; 3])?,
         enc => {
             let mut src = Src { r, pos: header.len };
-            read_binary_body(path, &mut src, &header, vi, [pi; 3], enc == Encoding::BinaryBe)?
+            read_binary_body(
+                path,
+                &mut src,
+                &header,
+                vi,
+                [pi; 3],
+                enc == Encoding::BinaryBe,
+            )?
         }
     };
     Ok(Some(pts.into_iter().map(|p| p.x).collect()))
@@ -1197,8 +1204,14 @@ mod tests {
                 binary,
             )
             .unwrap();
-            assert_eq!(read_ply_property(&path, "part").unwrap(), Some(vec![1.0, 5.0]));
-            assert_eq!(read_ply_property(&path, "other").unwrap(), Some(vec![-1.0, 0.5]));
+            assert_eq!(
+                read_ply_property(&path, "part").unwrap(),
+                Some(vec![1.0, 5.0])
+            );
+            assert_eq!(
+                read_ply_property(&path, "other").unwrap(),
+                Some(vec![-1.0, 0.5])
+            );
             assert_eq!(read_ply_property(&path, "y").unwrap(), Some(vec![1.0, 4.0]));
             assert_eq!(read_ply_property(&path, "missing").unwrap(), None);
         }
