@@ -13,6 +13,7 @@ pub mod agent;
 pub mod agent_mesh;
 pub mod cloud;
 pub mod detect;
+pub mod eval;
 pub mod fit;
 pub mod fuzzy;
 pub mod heightmap;

@@ -10,8 +10,8 @@ mod pcd;
 mod ply;
 mod xyz;
 
-pub use pcd::read_pcd;
-pub use ply::{read_ply, write_ply_points};
+pub use pcd::{read_pcd, write_pcd};
+pub use ply::{read_ply, read_ply_property, write_ply_points};
 pub use xyz::read_xyz;
 
 /// A point cloud in metres, z up (the environment P, section 3.1).

@@ -594,6 +594,43 @@ fn lzf_decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, (usize, Strin
     Ok(out)
 }
 
+/// Writes points (metres) as a PCD v0.7 file with `DATA binary`: fields `x y z` as 4-byte
+/// floats, an unorganised cloud (`HEIGHT 1`) and the identity `VIEWPOINT`, so that
+/// [`read_pcd`] gives the same points back (rounded to f32). The file is written to a
+/// temporary file beside `path` and renamed into place; the same points give the same bytes.
+pub fn write_pcd(path: &Path, points: &[Point3<f64>]) -> Result<(), CloudError> {
+    use std::io::Write;
+    let mut bytes = format!(
+        "# .PCD v0.7 - Point Cloud Data file format (written by afford)\nVERSION 0.7\n\
+         FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {n}\nHEIGHT 1\n\
+         VIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA binary\n",
+        n = points.len()
+    )
+    .into_bytes();
+    bytes.reserve(points.len() * 12);
+    for p in points {
+        for c in p.coords.iter() {
+            bytes.extend_from_slice(&(*c as f32).to_le_bytes());
+        }
+    }
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(format!(".tmp-{}", std::process::id()));
+    let tmp = path.with_file_name(name);
+    let result = File::create(&tmp)
+        .and_then(|mut f| {
+            f.write_all(&bytes)?;
+            f.sync_all()
+        })
+        .and_then(|()| std::fs::rename(&tmp, path));
+    result.map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        CloudError::Io {
+            path: path.to_path_buf(),
+            source: e,
+        }
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -968,5 +1005,27 @@ mod tests {
             matches!(&e, CloudError::Body { what, .. } if what.contains("after 1 of 2")),
             "{e}"
         );
+    }
+
+    #[test]
+    fn write_pcd_reads_back_the_same_points() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("w.pcd");
+        let pts = vec![
+            Point3::new(0.5, -1.25, 2.0),
+            Point3::new(1.0e-3, 3.5, -0.125),
+            Point3::new(0.1, 0.2, 0.3),
+        ];
+        write_pcd(&path, &pts).unwrap();
+        let back = read_pcd(&path).unwrap();
+        assert_eq!(back.len(), 3);
+        for (a, b) in pts.iter().zip(&back) {
+            assert!((a - b).norm() < 1e-6, "{a} {b}");
+        }
+        let first = std::fs::read(&path).unwrap();
+        write_pcd(&path, &pts).unwrap();
+        assert_eq!(first, std::fs::read(&path).unwrap());
+        write_pcd(&path, &[]).unwrap();
+        assert!(read_pcd(&path).unwrap().is_empty());
     }
 }

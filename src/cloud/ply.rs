@@ -772,6 +772,42 @@ fn write_body<W: Write>(
     w.flush()
 }
 
+/// Reads one scalar vertex property `name` of a PLY file (e.g. the per-point `part` label
+/// written by the synthetic data generator), one value per vertex in file order, or
+/// `Ok(None)` if the vertex element has no scalar property of that name.
+pub fn read_ply_property(path: &Path, name: &str) -> Result<Option<Vec<f64>>, CloudError> {
+    let file = File::open(path).map_err(|e| io_err(path, e))?;
+    let mut r = BufReader::with_capacity(1 << 16, file);
+    let header = parse_header(path, &mut r)?;
+    let Some(vi) = header.elements.iter().position(|e| e.name == "vertex") else {
+        return Ok(None);
+    };
+    let Some(pi) = header.elements[vi]
+        .props
+        .iter()
+        .position(|p| p.name == name && matches!(p.kind, Kind::Scalar(_)))
+    else {
+        return Ok(None);
+    };
+    // The point readers take three property indices; all three name the wanted one and
+    // the value comes back as x.
+    let pts = match header.encoding {
+        Encoding::Ascii => read_ascii_body(path, &mut r, &header, vi, [pi; 3])?,
+        enc => {
+            let mut src = Src { r, pos: header.len };
+            read_binary_body(
+                path,
+                &mut src,
+                &header,
+                vi,
+                [pi; 3],
+                enc == Encoding::BinaryBe,
+            )?
+        }
+    };
+    Ok(Some(pts.into_iter().map(|p| p.x).collect()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1152,6 +1188,32 @@ mod tests {
             b.truncate((seed >> 40) as usize % (b.len() + 1));
             let p = file(&dir, "g.ply", &b);
             let _ = read_ply(&p);
+        }
+    }
+
+    #[test]
+    fn read_ply_property_gets_one_extra_column() {
+        let dir = tempfile::tempdir().unwrap();
+        let pts = vec![Point3::new(0.0, 1.0, 2.0), Point3::new(3.0, 4.0, 5.0)];
+        for binary in [true, false] {
+            let path = dir.path().join(format!("p{binary}.ply"));
+            write_ply_points(
+                &path,
+                &pts,
+                &[("part", vec![1.0, 5.0]), ("other", vec![-1.0, 0.5])],
+                binary,
+            )
+            .unwrap();
+            assert_eq!(
+                read_ply_property(&path, "part").unwrap(),
+                Some(vec![1.0, 5.0])
+            );
+            assert_eq!(
+                read_ply_property(&path, "other").unwrap(),
+                Some(vec![-1.0, 0.5])
+            );
+            assert_eq!(read_ply_property(&path, "y").unwrap(), Some(vec![1.0, 4.0]));
+            assert_eq!(read_ply_property(&path, "missing").unwrap(), None);
         }
     }
 }

@@ -6,8 +6,11 @@
 //! floors (negatives) from them. World frame: metres, z up, floor at z = 0; seating
 //! furniture faces +x (the backrest is on the -x side).
 
+pub mod camera;
+pub mod dataset;
 pub mod furniture;
 pub mod mesh;
+pub mod meshio;
 
 pub use furniture::*;
 pub use mesh::{sample_surface, Mesh, Part};
