@@ -15,12 +15,19 @@ use criterion::{criterion_group, criterion_main, Criterion};
 fn stages(c: &mut Criterion) {
     let sample = Path::new("data/sample/room.ply");
     let cloud = cloud::load(sample).unwrap().cloud;
-    let (agent, h) = load_models(Path::new("agents/human.toml"), Path::new("affordances/sitting.toml"), 1.75).unwrap();
+    let (agent, h) = load_models(
+        Path::new("agents/human.toml"),
+        Path::new("affordances/sitting.toml"),
+        1.75,
+    )
+    .unwrap();
     let cfg = DetectConfig::default();
     let mut g = c.benchmark_group("room");
     g.sample_size(10);
     g.bench_function("load_ply", |b| b.iter(|| cloud::load(sample).unwrap()));
-    g.bench_function("heightmap", |b| b.iter(|| HeightMap::from_cloud(&cloud, cfg.heightmap_cell)));
+    g.bench_function("heightmap", |b| {
+        b.iter(|| HeightMap::from_cloud(&cloud, cfg.heightmap_cell))
+    });
     let prepared = prepare(&cloud, &cfg);
     g.bench_function("hypotheses", |b| {
         b.iter(|| hypotheses(&prepared.map, &h.hypothesis, h.orientation, agent.height))
@@ -31,7 +38,9 @@ fn stages(c: &mut Criterion) {
     let sofa_cloud = scene_cloud(&[sofa(&SofaParams::default())], 4000.0, 0.002, 1, true);
     let mut g = c.benchmark_group("sofa");
     g.sample_size(10);
-    g.bench_function("detect", |b| b.iter(|| detect(&sofa_cloud, &agent, &h, &cfg)));
+    g.bench_function("detect", |b| {
+        b.iter(|| detect(&sofa_cloud, &agent, &h, &cfg))
+    });
     g.finish();
 }
 

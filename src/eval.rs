@@ -29,7 +29,7 @@ use crate::cloud;
 use crate::detect::{detect, DetectConfig};
 use crate::model::ModelError;
 use crate::report::{self, FileReport};
-use crate::run::load_models;
+use crate::run::load_models_or_builtin;
 
 /// What went wrong before any file could be scored.
 #[derive(Debug, thiserror::Error)]
@@ -358,19 +358,20 @@ pub fn iou(a: &[bool], b: &[bool]) -> Option<f64> {
 type FileOutcome = Result<Vec<(Vec<String>, Option<f64>)>, String>;
 
 /// Runs detection on every file of `labels_csv` (paths relative to it) for the agent
-/// `agent` scaled to each of `heights` (metres) with the hierarchy `affordances`, and
+/// `agent` scaled to each of `heights` (metres) with the hierarchy `affordances` (the
+/// built-in models where `None`), and
 /// scores the answers (see the module documentation). Files run in parallel (rayon);
 /// `progress` shows a progress bar on stderr.
 pub fn evaluate(
     labels_csv: &Path,
     heights: &[f64],
-    agent: &Path,
-    affordances: &Path,
+    agent: Option<&Path>,
+    affordances: Option<&Path>,
     progress: bool,
 ) -> Result<Evaluation, EvalError> {
     let models = heights
         .iter()
-        .map(|&h| load_models(agent, affordances, h))
+        .map(|&h| load_models_or_builtin(agent, affordances, h))
         .collect::<Result<Vec<_>, _>>()?;
     let text = std::fs::read_to_string(labels_csv).map_err(|source| EvalError::Io {
         path: labels_csv.to_path_buf(),

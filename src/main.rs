@@ -21,6 +21,56 @@ enum Command {
     Detect(DetectArgs),
     /// Draw the height map, the hypotheses and the posed agents of one cloud as a PNG.
     Inspect(InspectArgs),
+    /// Write a labelled synthetic dataset (procedural furniture, virtual depth camera).
+    Synth(SynthArgs),
+    /// Score detection against a labels.csv: precision, recall and F per affordance.
+    Eval(EvalArgs),
+}
+
+#[derive(clap::Args)]
+struct SynthArgs {
+    /// Output directory (created).
+    #[arg(long)]
+    out: PathBuf,
+    /// Random seed: the same seed writes the same bytes.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Scenes of each kind: full models, single views, objects against a wall, rooms.
+    #[arg(long, num_args = 4, value_names = ["FULL", "VIEW", "WALL", "ROOM"])]
+    count: Option<Vec<usize>>,
+    /// Render depth views of these triangle-mesh PLY files instead of furniture.
+    #[arg(long, num_args = 1..)]
+    mesh: Vec<PathBuf>,
+    /// Render depth views of every model of this labels.csv (real models), with labels.
+    #[arg(long, conflicts_with = "mesh")]
+    models: Option<PathBuf>,
+    /// Views per mesh or model.
+    #[arg(long, default_value_t = 3)]
+    views: usize,
+}
+
+#[derive(clap::Args)]
+struct EvalArgs {
+    /// A labels.csv: column `file` (relative to it), then one 0/1 column per affordance.
+    labels: PathBuf,
+    /// Body heights, metres.
+    #[arg(long, value_delimiter = ',', default_value = "1.75", value_parser = parse_height)]
+    heights: Vec<f64>,
+    /// Agent model [default: the built-in agents/human.toml].
+    #[arg(long)]
+    agent: Option<PathBuf>,
+    /// Affordance hierarchy [default: the built-in affordances/sitting.toml].
+    #[arg(long)]
+    affordances: Option<PathBuf>,
+    /// Write the scores as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write the scores as CSV.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(clap::Args)]
@@ -136,6 +186,37 @@ fn main() -> ExitCode {
             };
             let code = run_detect(
                 &req,
+                &mut std::io::stdout().lock(),
+                &mut std::io::stderr().lock(),
+            );
+            ExitCode::from(code as u8)
+        }
+        Command::Synth(a) => {
+            let code = afford::run::run_synth(
+                &afford::run::SynthRequest {
+                    out: a.out,
+                    seed: a.seed,
+                    count: a.count,
+                    meshes: a.mesh,
+                    models: a.models,
+                    views: a.views,
+                },
+                &mut std::io::stdout().lock(),
+                &mut std::io::stderr().lock(),
+            );
+            ExitCode::from(code as u8)
+        }
+        Command::Eval(a) => {
+            let code = afford::run::run_eval(
+                &afford::run::EvalRequest {
+                    labels: a.labels,
+                    heights: a.heights,
+                    agent: a.agent,
+                    affordances: a.affordances,
+                    json: a.json,
+                    csv: a.csv,
+                    quiet: a.quiet,
+                },
                 &mut std::io::stdout().lock(),
                 &mut std::io::stderr().lock(),
             );

@@ -285,3 +285,138 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
     );
     0
 }
+
+/// Everything `afford synth` was asked to do.
+#[derive(Debug, Clone)]
+pub struct SynthRequest {
+    /// Output directory.
+    pub out: PathBuf,
+    /// Random seed.
+    pub seed: u64,
+    /// Scenes per kind (full, view, wall, room); `None` for the default spec.
+    pub count: Option<Vec<usize>>,
+    /// Meshes to render views of, instead of furniture.
+    pub meshes: Vec<PathBuf>,
+    /// A labels.csv of meshes to render views of, with their labels.
+    pub models: Option<PathBuf>,
+    /// Views per mesh or model.
+    pub views: usize,
+}
+
+/// Runs `afford synth`; returns the exit code.
+pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    use crate::synth::dataset;
+    if let Err(e) = std::fs::create_dir_all(&req.out) {
+        let _ = writeln!(err, "error: {}: cannot create: {e}", req.out.display());
+        return 2;
+    }
+    if let Some(labels) = &req.models {
+        return match dataset::views_of_labelled_models(labels, &req.out, req.seed, req.views) {
+            Ok(s) => {
+                let _ = writeln!(
+                    out,
+                    "wrote {} views and {}",
+                    s.rows.len(),
+                    s.labels_csv.display()
+                );
+                0
+            }
+            Err(e) => {
+                let _ = writeln!(err, "error: {e}");
+                2
+            }
+        };
+    }
+    if !req.meshes.is_empty() {
+        let mut failed = 0;
+        for m in &req.meshes {
+            match dataset::render_mesh_views(m, &req.out, req.seed, req.views) {
+                Ok(files) => {
+                    for f in files {
+                        let _ = writeln!(out, "{}", f.display());
+                    }
+                }
+                Err(e) => {
+                    let _ = writeln!(err, "error: {e}");
+                    failed += 1;
+                }
+            }
+        }
+        return if failed > 0 { 2 } else { 0 };
+    }
+    let mut spec = dataset::DatasetSpec::default();
+    if let Some(c) = &req.count {
+        if let [full, view, wall, room] = c[..] {
+            spec.full = full;
+            spec.view = view;
+            spec.wall = wall;
+            spec.room = room;
+        }
+    }
+    match dataset::generate(&req.out, req.seed, &spec) {
+        Ok(s) => {
+            let _ = writeln!(
+                out,
+                "wrote {} scenes and {}",
+                s.rows.len(),
+                s.labels_csv.display()
+            );
+            0
+        }
+        Err(e) => {
+            let _ = writeln!(err, "error: {e}");
+            2
+        }
+    }
+}
+
+/// Everything `afford eval` was asked to do.
+#[derive(Debug, Clone)]
+pub struct EvalRequest {
+    /// The labels file.
+    pub labels: PathBuf,
+    /// Body heights, metres.
+    pub heights: Vec<f64>,
+    /// Agent model file; `None` for the built-in one.
+    pub agent: Option<PathBuf>,
+    /// Hierarchy file; `None` for the built-in one.
+    pub affordances: Option<PathBuf>,
+    /// JSON output.
+    pub json: Option<PathBuf>,
+    /// CSV output.
+    pub csv: Option<PathBuf>,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
+/// Runs `afford eval`: prints the markdown table; returns the exit code (2 on error or
+/// when a file could not be read).
+pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    let ev = match crate::eval::evaluate(
+        &req.labels,
+        &req.heights,
+        req.agent.as_deref(),
+        req.affordances.as_deref(),
+        !req.quiet,
+    ) {
+        Ok(ev) => ev,
+        Err(e) => {
+            let _ = writeln!(err, "error: {e}");
+            return 2;
+        }
+    };
+    let _ = out.write_all(ev.markdown().as_bytes());
+    let mut code = 0;
+    for (target, text) in [(&req.json, ev.to_json()), (&req.csv, ev.to_csv())] {
+        if let Some(p) = target {
+            if let Err(e) = report::write_atomic(p, text.as_bytes()) {
+                let _ = writeln!(err, "error: {}: cannot write: {e}", p.display());
+                code = 2;
+            }
+        }
+    }
+    if !ev.failed.is_empty() {
+        code = 2;
+    }
+    code
+}

@@ -339,44 +339,64 @@ impl DistanceField {
         // Squared distances in cells, z-major (`(z * ny + y) * nx + x`) for the first passes.
         let mut d = vec![FAR; nx * ny * nz];
         for k in keys {
-            let (x, y, z) = ((k[0] - min[0]) as usize, (k[1] - min[1]) as usize, (k[2] - min[2]) as usize);
+            let (x, y, z) = (
+                (k[0] - min[0]) as usize,
+                (k[1] - min[1]) as usize,
+                (k[2] - min[2]) as usize,
+            );
             d[(z * ny + y) * nx + x] = 0.0;
         }
         let longest = nx.max(ny).max(nz);
-        let scratch = || (vec![0f32; longest], vec![0f32; longest], vec![0usize; longest], vec![0f32; longest + 1]);
+        let scratch = || {
+            (
+                vec![0f32; longest],
+                vec![0f32; longest],
+                vec![0usize; longest],
+                vec![0f32; longest + 1],
+            )
+        };
         // Along x: rows are contiguous.
-        d.par_chunks_mut(nx).for_each_init(scratch, |(f, out, vs, zs), row| {
-            f[..nx].copy_from_slice(row);
-            edt_1d(&f[..nx], &mut out[..nx], vs, zs);
-            row.copy_from_slice(&out[..nx]);
-        });
+        d.par_chunks_mut(nx)
+            .for_each_init(scratch, |(f, out, vs, zs), row| {
+                f[..nx].copy_from_slice(row);
+                edt_1d(&f[..nx], &mut out[..nx], vs, zs);
+                row.copy_from_slice(&out[..nx]);
+            });
         // Along y: within each z slab.
-        d.par_chunks_mut(nx * ny).for_each_init(scratch, |(f, out, vs, zs), slab| {
-            for x in 0..nx {
-                for y in 0..ny {
-                    f[y] = slab[y * nx + x];
+        d.par_chunks_mut(nx * ny)
+            .for_each_init(scratch, |(f, out, vs, zs), slab| {
+                for x in 0..nx {
+                    for y in 0..ny {
+                        f[y] = slab[y * nx + x];
+                    }
+                    edt_1d(&f[..ny], &mut out[..ny], vs, zs);
+                    for y in 0..ny {
+                        slab[y * nx + x] = out[y];
+                    }
                 }
-                edt_1d(&f[..ny], &mut out[..ny], vs, zs);
-                for y in 0..ny {
-                    slab[y * nx + x] = out[y];
-                }
-            }
-        });
+            });
         // Along z: read the z-major grid, write one y-major plane per y.
         let src = &d;
         let mut dist = vec![0f32; nx * ny * nz];
-        dist.par_chunks_mut(nx * nz).enumerate().for_each_init(scratch, |(f, out, vs, zs), (y, plane)| {
-            for x in 0..nx {
-                for z in 0..nz {
-                    f[z] = src[(z * ny + y) * nx + x];
+        dist.par_chunks_mut(nx * nz).enumerate().for_each_init(
+            scratch,
+            |(f, out, vs, zs), (y, plane)| {
+                for x in 0..nx {
+                    for z in 0..nz {
+                        f[z] = src[(z * ny + y) * nx + x];
+                    }
+                    edt_1d(&f[..nz], &mut out[..nz], vs, zs);
+                    for z in 0..nz {
+                        let q = out[z];
+                        plane[z * nx + x] = if q >= FAR / 2.0 {
+                            f32::INFINITY
+                        } else {
+                            q.sqrt() * v as f32
+                        };
+                    }
                 }
-                edt_1d(&f[..nz], &mut out[..nz], vs, zs);
-                for z in 0..nz {
-                    let q = out[z];
-                    plane[z * nx + x] = if q >= FAR / 2.0 { f32::INFINITY } else { q.sqrt() * v as f32 };
-                }
-            }
-        });
+            },
+        );
         DistanceField { min, dims, dist }
     }
 

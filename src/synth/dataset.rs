@@ -10,7 +10,8 @@
 //! * `backrest`: a back at least 0.25 m above the seat, or (kind `wall`) a wall within
 //!   0.15 m behind a backless seat;
 //! * `armrest`: arms 0.12–0.35 m above the seat, on the seat's sides;
-//! * `headrest`: a back reaching at least 0.70 m above the seat;
+//! * `headrest`: a back reaching at least 0.70 m above the seat, or (kind `wall`) the wall
+//!   behind a backless seat;
 //! * `lying`: a flat surface at least 1.9 m long and 0.6 m wide (beds, long wide benches,
 //!   long deep sofas).
 //!
@@ -1038,8 +1039,12 @@ fn one_scene(kind: SceneKind, class: Class, seed: u64, spec: &DatasetSpec) -> Sc
                     2.5,
                     0.1,
                 ));
+                // A seat without a back of its own, against a wall: the wall is the
+                // backrest and, reaching far above the seat, the headrest (README,
+                // "Conventions").
                 if labels.sitting && !labels.backrest {
                     labels.backrest = true;
+                    labels.headrest = true;
                 }
             }
             let n = m.len();
@@ -1447,7 +1452,7 @@ mod tests {
     fn a_stool_against_a_wall_gets_a_backrest_and_is_seen() {
         let spec = DatasetSpec::default();
         let s = one_scene(SceneKind::Wall, Class::Stool, 5, &spec);
-        assert!(s.labels.sitting && s.labels.backrest);
+        assert!(s.labels.sitting && s.labels.backrest && s.labels.headrest);
         assert!(s.parts.contains(&Part::Seat));
         let v = one_scene(SceneKind::View, Class::Stool, 5, &spec);
         assert!(v.labels.sitting && !v.labels.backrest);
