@@ -44,5 +44,11 @@ fn stages(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, stages);
+/// The benchmark group.
+#[allow(missing_docs)]
+mod group {
+    use super::*;
+    criterion_group!(benches, stages);
+}
+use group::benches;
 criterion_main!(benches);
