@@ -144,7 +144,7 @@ pub fn best_at(
         .filter(|u| u.nodes.first().is_some_and(|r| r.found))
         // First of equals wins: headings are tried in a fixed order.
         .fold(None::<Unfolded>, |best, u| match best {
-            Some(b) if b.score >= u.score => Some(b),
+            Some(b) if !u.stronger_than(&b, h.score.select) => Some(b),
             _ => Some(u),
         });
     (best, n)
@@ -180,8 +180,7 @@ pub fn detect_prepared(
     order.sort_by(|&a, &b| {
         candidates[b]
             .1
-            .score
-            .total_cmp(&candidates[a].1.score)
+            .rank(&candidates[a].1, h.score.select)
             .then(a.cmp(&b))
     });
     let centres: Vec<Point3<f64>> = candidates

@@ -71,6 +71,17 @@ pub struct FitRule {
     pub unchecked_links: Vec<usize>,
 }
 
+/// How the best pose of a hypothesis, and the strongest of neighbouring detections, are chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Selection {
+    /// By the accumulated score of Eq. 5 alone (the paper).
+    Score,
+    /// By the number of fine-grained affordances found, then by the score: Eq. 5 saturates
+    /// near 1 once two nodes score well, so a further affordance barely moves it.
+    MostSpecific,
+}
+
 /// Parameters of the scores (Eq. 3-5).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScoreRule {
@@ -81,6 +92,8 @@ pub struct ScoreRule {
     /// Cosine of the largest angle between a contact's normal and a node's `release`
     /// direction for the contact to count as support.
     pub support_cos: f64,
+    /// How poses and detections are ranked.
+    pub select: Selection,
 }
 
 /// One joint constraint (theta1, theta2, theta_d, axis, joint) of J_F.
@@ -125,6 +138,9 @@ pub struct Node {
     /// opposite this direction (agent frame: x forward, z up): `[0, 0, 1]` means "from
     /// below", so an armrest counts and a wall beside the arm does not.
     pub release: Option<nalgebra::Vector3<f64>>,
+    /// Whether a contact already at theta1 is refused: the links had no room to unfold
+    /// (shanks that start in a mattress are not hanging from a seat).
+    pub free_start: bool,
 }
 
 /// A joint held within `[lower, upper]` (radians) while a node is judged.
@@ -202,6 +218,7 @@ struct ScoreFile {
     sigma_theta: f64,
     epsilon: f64,
     support_angle: f64,
+    select: Selection,
 }
 
 #[derive(Deserialize)]
@@ -220,6 +237,8 @@ struct NodeFile {
     clamp: Vec<ClampFile>,
     #[serde(default)]
     release: Option<[f64; 3]>,
+    #[serde(default)]
+    free_start: bool,
 }
 
 #[derive(Deserialize)]
@@ -511,6 +530,7 @@ impl Hierarchy {
                     }
                     r => r,
                 },
+                free_start: n.free_start,
             });
         }
         let f = &file.fit;
@@ -533,6 +553,7 @@ impl Hierarchy {
                 sigma_theta: file.score.sigma_theta.to_radians(),
                 epsilon: file.score.epsilon,
                 support_cos: file.score.support_angle.to_radians().cos(),
+                select: file.score.select,
             },
             suppression_radius: file.suppression_radius,
             initial,

@@ -41,6 +41,34 @@ pub struct Unfolded {
     pub stability: f64,
 }
 
+impl Unfolded {
+    /// Number of fine-grained affordances found.
+    pub fn found(&self) -> usize {
+        self.nodes.iter().filter(|n| n.found).count()
+    }
+
+    /// Whether `self` ranks above `other` under `select` (ties are not stronger).
+    pub fn stronger_than(&self, other: &Unfolded, select: crate::hierarchy::Selection) -> bool {
+        self.rank(other, select) == std::cmp::Ordering::Greater
+    }
+
+    /// Orders two poses under `select`.
+    pub fn rank(
+        &self,
+        other: &Unfolded,
+        select: crate::hierarchy::Selection,
+    ) -> std::cmp::Ordering {
+        use crate::hierarchy::Selection;
+        match select {
+            Selection::Score => self.score.total_cmp(&other.score),
+            Selection::MostSpecific => self
+                .found()
+                .cmp(&other.found())
+                .then(self.score.total_cmp(&other.score)),
+        }
+    }
+}
+
 /// The T-norm of Eq. 4.
 pub fn t_norm(r: f64, q: f64) -> f64 {
     r * q
@@ -224,6 +252,9 @@ fn sweep_branch(
     };
     let mut hit = scene.first_contact(&mut motion, speed.max(1e-9), contact.resolution);
     let mut blocked = None;
+    if node.free_start && hit == Some(0.0) {
+        blocked = hit.take();
+    }
     if let (Some(t), Some(release)) = (hit, node.release) {
         let mut parts = Vec::new();
         motion(t, &mut parts);

@@ -11,7 +11,7 @@
 //!   0.15 m behind a backless seat;
 //! * `armrest`: arms 0.12–0.35 m above the seat, on the seat's sides;
 //! * `headrest`: a back reaching at least 0.70 m above the seat, or (kind `wall`) the wall
-//!   behind a backless seat;
+//!   0-0.15 m behind the seat;
 //! * `lying`: a flat surface at least 1.9 m long and 0.6 m wide (beds, long wide benches,
 //!   long deep sofas).
 //!
@@ -962,8 +962,14 @@ struct Scene {
     doubtful: Option<String>,
 }
 
+/// Least visible area of a seat or lying surface (m^2) for its labels to count in a view:
+/// about a 0.22 m square, under which the hip-breadth template (0.33 m across at 1.75 m)
+/// cannot rest on it, and neither could a person judging the picture.
+const MIN_VISIBLE_SEAT_M2: f64 = 0.05;
+
 /// Renders `scene` with `objects` given by triangle ranges; an object's labels count when
-/// at least `min_seat` points of its seat or lying surface are seen.
+/// at least [`MIN_VISIBLE_SEAT_M2`] of its (horizontal) seat or lying surface is seen, each
+/// point standing for the patch its pixel covers.
 fn render_with_visibility(
     scene: &Mesh,
     ranges: &[(usize, usize, Labels, Option<String>)],
@@ -974,16 +980,24 @@ fn render_with_visibility(
     let parts: Vec<Part> = tris.iter().map(|&t| scene.parts[t]).collect();
     let mut labels = Labels::default();
     let mut doubtful = None;
+    let pixel = (cam.hfov_deg / cam.width as f64 * cam.stride.max(1) as f64).to_radians();
     for (s, e, l, d) in ranges {
-        let seen = tris
+        let seen: f64 = tris
             .iter()
-            .filter(|&&t| {
+            .zip(&cloud.points)
+            .filter(|(&t, _)| {
                 t >= *s && t < *e && matches!(scene.parts[t], Part::Seat | Part::LyingSurface)
             })
-            .count();
+            .map(|(_, p)| {
+                let ray = p - cam.position;
+                let r = ray.norm();
+                // A horizontal surface seen at a slant covers more per pixel.
+                (r * pixel).powi(2) / (ray.z.abs() / r).max(0.2)
+            })
+            .sum();
         // Doubtful objects have no seat part: count any visible point.
         let any = tris.iter().filter(|&&t| t >= *s && t < *e).count();
-        if seen >= 30 {
+        if seen >= MIN_VISIBLE_SEAT_M2 {
             labels = labels.or(*l);
         }
         if d.is_some() && any >= 100 && doubtful.is_none() {
@@ -1039,10 +1053,10 @@ fn one_scene(kind: SceneKind, class: Class, seed: u64, spec: &DatasetSpec) -> Sc
                     2.5,
                     0.1,
                 ));
-                // A seat without a back of its own, against a wall: the wall is the
-                // backrest and, reaching far above the seat, the headrest (README,
-                // "Conventions").
-                if labels.sitting && !labels.backrest {
+                // A seat against a wall: the wall reaches far above the seat within
+                // 0.15 m of its back, so the head leaning back rests on it (headrest),
+                // and a backless seat gets it as its backrest (README, "Conventions").
+                if labels.sitting {
                     labels.backrest = true;
                     labels.headrest = true;
                 }
