@@ -47,6 +47,9 @@ struct SynthArgs {
     /// Views per mesh or model.
     #[arg(long, default_value_t = 3)]
     views: usize,
+    /// Depth-camera pixel stride (1 = 640 x 480 rays, 2 = 320 x 240, ...).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=16))]
+    stride: u32,
 }
 
 #[derive(clap::Args)]
@@ -200,6 +203,7 @@ fn main() -> ExitCode {
                     meshes: a.mesh,
                     models: a.models,
                     views: a.views,
+                    stride: a.stride,
                 },
                 &mut std::io::stdout().lock(),
                 &mut std::io::stderr().lock(),

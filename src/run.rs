@@ -301,6 +301,8 @@ pub struct SynthRequest {
     pub models: Option<PathBuf>,
     /// Views per mesh or model.
     pub views: usize,
+    /// Depth-camera pixel stride for generated scenes.
+    pub stride: u32,
 }
 
 /// Runs `afford synth`; returns the exit code.
@@ -344,7 +346,10 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
         }
         return if failed > 0 { 2 } else { 0 };
     }
-    let mut spec = dataset::DatasetSpec::default();
+    let mut spec = dataset::DatasetSpec {
+        stride: req.stride,
+        ..Default::default()
+    };
     if let Some(c) = &req.count {
         if let [full, view, wall, room] = c[..] {
             spec.full = full;
