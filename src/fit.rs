@@ -163,3 +163,94 @@ pub fn stability(
     let mean = sum / n as f64;
     (-(mean * mean) / (2.0 * h.fit.sigma_d * h.fit.sigma_d)).exp()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloud::PointCloud;
+    use crate::hierarchy::Hierarchy;
+    use crate::run::{BUILTIN_AGENT, BUILTIN_SITTING};
+    use crate::scene::SceneConfig;
+    use std::path::Path;
+
+    fn models() -> (Agent, Hierarchy) {
+        let a = Agent::from_toml(BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap();
+        let h = Hierarchy::from_toml(BUILTIN_SITTING, Path::new("sitting.toml"), &a).unwrap();
+        (a, h)
+    }
+
+    /// A 1 x 1 m seat top of points 1 cm apart at z = 0.45 (its voxels reach 0.44-0.46).
+    fn seat() -> Scene {
+        let mut pts = Vec::new();
+        for i in 0..100 {
+            for j in 0..100 {
+                pts.push(Point3::new(
+                    -0.5 + i as f64 * 0.01,
+                    -0.5 + j as f64 * 0.01,
+                    0.45,
+                ));
+            }
+        }
+        Scene::new(
+            &PointCloud::new(pts),
+            &SceneConfig {
+                voxel_size: 0.02,
+                floor: true,
+                field_margin: 0.3,
+            },
+        )
+    }
+
+    /// Eq. 1 with the pelvis bottom `gap` metres above the seat's voxels.
+    fn stability_at(gap: f64) -> f64 {
+        let (a, h) = models();
+        let s = seat();
+        let pelvis_radius = a.joints[0].link.as_ref().unwrap().radius;
+        let mut frames = Vec::new();
+        let place = Placement {
+            position: Point3::new(0.0, 0.0, 0.46 + gap + pelvis_radius),
+            yaw: 0.0,
+        };
+        a.forward_kinematics(&place, &h.initial, &mut frames);
+        stability(&a, &h, &s, &frames)
+    }
+
+    #[test]
+    fn stability_follows_eq_1() {
+        // sigma_d = 0.03 m: resting gives ~1, one sigma exp(-1/2) = 0.61, 10 cm ~0.
+        assert!(stability_at(0.0) > 0.9, "{}", stability_at(0.0));
+        let one_sigma = stability_at(0.03);
+        assert!((one_sigma - (-0.5f64).exp()).abs() < 0.15, "{one_sigma}");
+        assert!(stability_at(0.10) < 0.01, "{}", stability_at(0.10));
+    }
+
+    #[test]
+    fn the_agent_is_lowered_onto_the_seat() {
+        let (a, h) = models();
+        let s = seat();
+        let hyp = Hypothesis {
+            cell: (0, 0),
+            position: Point3::new(0.0, 0.0, 0.45),
+            top: 0.45,
+            availability: 1.0,
+            heading: Some(0.0),
+            memberships: [1.0; 3],
+        };
+        let fits = fit(&a, &h, &s, &hyp, &ContactConfig { resolution: 0.005 });
+        assert_eq!(
+            fits.len(),
+            h.fit.yaw_offsets.len(),
+            "every heading is free and stable on a flat seat"
+        );
+        let f = &fits[0];
+        let mut frames = Vec::new();
+        a.forward_kinematics(&f.placement, &f.posture, &mut frames);
+        let pelvis = a.cylinders(&frames, |j| j == 0)[0];
+        let bottom = pelvis.a.z - pelvis.radius;
+        // The seat's voxels end at 0.46 m; contact is located to 5 mm.
+        assert!(
+            (0.455..=0.47).contains(&bottom),
+            "pelvis bottom at {bottom}"
+        );
+    }
+}
