@@ -150,57 +150,92 @@ fn unfold_node(
         posture.angles[s.joint] = s.theta1;
         posture.axes[s.joint] = s.axis;
     }
-    let mut local = 1.0;
-    let mut found = false;
-    for branch in branches(agent, node) {
-        let links: Vec<usize> = node
-            .links
-            .iter()
-            .copied()
-            .filter(|&l| {
-                branch
-                    .iter()
-                    .any(|&s| agent.is_descendant(l, node.sweeps[s].joint))
-            })
-            .collect();
-        // The spread joints that move this branch's links; each of their angles is tried.
-        let spreads: Vec<&crate::hierarchy::Spread> = node
-            .spreads
-            .iter()
-            .filter(|sp| links.iter().any(|&l| agent.is_descendant(l, sp.joint)))
-            .collect();
-        let settings = spreads.iter().map(|sp| sp.angles.len()).max().unwrap_or(1);
-        let mut best: Option<(Option<f64>, f64, Posture)> = None;
-        for k in 0..settings {
-            let mut trial = posture.clone();
-            for sp in &spreads {
-                trial.angles[sp.joint] = sp.angles[k.min(sp.angles.len() - 1)];
-            }
-            let (hit, r) = sweep_branch(
-                agent, h, scene, place, &mut trial, node, &branch, &links, contact,
-            );
-            let better = match &best {
-                None => true,
-                Some((bh, br, _)) => {
-                    (hit.is_some() && bh.is_none()) || (hit.is_some() == bh.is_some() && r > *br)
+    let branches = branches(agent, node);
+    // The links of E_F each branch moves.
+    let branch_links: Vec<Vec<usize>> = branches
+        .iter()
+        .map(|branch| {
+            node.links
+                .iter()
+                .copied()
+                .filter(|&l| {
+                    branch
+                        .iter()
+                        .any(|&s| agent.is_descendant(l, node.sweeps[s].joint))
+                })
+                .collect()
+        })
+        .collect();
+    // A spread joint that moves the links of several branches (the trunk leaning sideways
+    // moves both arms) is one setting for the whole node: each of its angles is tried with
+    // all branches, and the best outcome (found first, then local score) is kept.
+    let moves = |sp: &crate::hierarchy::Spread, links: &[usize]| {
+        links.iter().any(|&l| agent.is_descendant(l, sp.joint))
+    };
+    let shared: Vec<&crate::hierarchy::Spread> = node
+        .spreads
+        .iter()
+        .filter(|sp| branch_links.iter().filter(|ls| moves(sp, ls)).count() > 1)
+        .collect();
+    let shared_settings = shared.iter().map(|sp| sp.angles.len()).max().unwrap_or(1);
+    let mut outcome: Option<(bool, f64, Posture)> = None;
+    for ks in 0..shared_settings {
+        let mut node_posture = posture.clone();
+        for sp in &shared {
+            node_posture.angles[sp.joint] = sp.angles[ks.min(sp.angles.len() - 1)];
+        }
+        let mut local = 1.0;
+        let mut found = false;
+        for (branch, links) in branches.iter().zip(&branch_links) {
+            // The spread joints that move only this branch's links; each of their angles is tried.
+            let spreads: Vec<&crate::hierarchy::Spread> = node
+                .spreads
+                .iter()
+                .filter(|sp| moves(sp, links) && !shared.iter().any(|s| s.joint == sp.joint))
+                .collect();
+            let settings = spreads.iter().map(|sp| sp.angles.len()).max().unwrap_or(1);
+            let mut best: Option<(Option<f64>, f64, Posture)> = None;
+            for k in 0..settings {
+                let mut trial = node_posture.clone();
+                for sp in &spreads {
+                    trial.angles[sp.joint] = sp.angles[k.min(sp.angles.len() - 1)];
                 }
-            };
-            if better {
-                best = Some((hit, r, trial));
+                let (hit, r) = sweep_branch(
+                    agent, h, scene, place, &mut trial, node, branch, links, contact,
+                );
+                let better = match &best {
+                    None => true,
+                    Some((bh, br, _)) => {
+                        (hit.is_some() && bh.is_none())
+                            || (hit.is_some() == bh.is_some() && r > *br)
+                    }
+                };
+                if better {
+                    best = Some((hit, r, trial));
+                }
+            }
+            if let Some((hit, r, trial)) = best {
+                for &s in branch {
+                    let j = node.sweeps[s].joint;
+                    node_posture.angles[j] = trial.angles[j];
+                }
+                for sp in &spreads {
+                    node_posture.angles[sp.joint] = trial.angles[sp.joint];
+                }
+                found |= hit.is_some();
+                local = t_norm(local, r);
             }
         }
-        if let Some((hit, r, trial)) = best {
-            for &s in &branch {
-                let j = node.sweeps[s].joint;
-                posture.angles[j] = trial.angles[j];
-            }
-            for sp in &spreads {
-                posture.angles[sp.joint] = trial.angles[sp.joint];
-            }
-            found |= hit.is_some();
-            local = t_norm(local, r);
+        let better = match &outcome {
+            None => true,
+            Some((bf, bl, _)) => (found && !*bf) || (found == *bf && local > *bl),
+        };
+        if better {
+            outcome = Some((found, local, node_posture));
         }
     }
+    let (found, local, node_posture) = outcome.expect("at least one setting");
+    *posture = node_posture;
     if !found {
         for c in &node.clamps {
             posture.angles[c.joint] = before.angles[c.joint];
