@@ -16,10 +16,10 @@ pub use frame::{
     check_units, parse_matrix, to_world, FloorMode, FrameError, FrameOptions, FrameReport, Units,
     Up,
 };
+pub use mesh::{read_mesh, sample_mesh};
 pub use pcd::{read_pcd, write_pcd};
 pub use ply::{read_ply, read_ply_property, write_ply_points};
 pub use xyz::read_xyz;
-
 
 /// A point cloud in metres, z up (the environment P, section 3.1).
 #[derive(Debug, Clone, Default, PartialEq)]
