@@ -10,8 +10,6 @@
 
 use std::collections::HashMap;
 use std::fmt;
-#[cfg(test)]
-use std::path::Path;
 use std::str::FromStr;
 
 use nalgebra::{Matrix3, Matrix4, Point3, Rotation3, UnitQuaternion, Vector3};
