@@ -6,10 +6,17 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Point3;
 
+pub mod frame;
+pub mod mesh;
 mod pcd;
 mod ply;
 mod xyz;
 
+pub use frame::{
+    check_units, parse_matrix, to_world, FloorMode, FrameError, FrameOptions, FrameReport, Units,
+    Up,
+};
+pub use mesh::{read_mesh, sample_mesh};
 pub use pcd::{read_pcd, write_pcd};
 pub use ply::{read_ply, read_ply_property, write_ply_points};
 pub use xyz::read_xyz;
