@@ -19,6 +19,7 @@ pub mod fuzzy;
 pub mod heightmap;
 pub mod hierarchy;
 pub mod hypotheses;
+pub mod input;
 pub mod model;
 pub mod render;
 pub mod report;

@@ -3,7 +3,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use afford::cloud::{parse_matrix, FloorMode, FrameOptions, Units, Up};
 use afford::detect::DetectConfig;
+use afford::input::InputOptions;
 use afford::run::{run_detect, run_inspect, DetectRequest, InspectRequest};
 use clap::{Parser, Subcommand};
 
@@ -93,6 +95,62 @@ struct ModelArgs {
 }
 
 #[derive(clap::Args)]
+struct InputArgs {
+    /// The axis that points up in the file: x, y, z, -x, -y, -z.
+    #[arg(long, default_value = "z")]
+    up: Up,
+    /// The file is a depth-camera frame (x right, y down, z forward); implies --up -y.
+    #[arg(long)]
+    camera: bool,
+    /// A 4x4 matrix (16 numbers, row-major) or a file holding one, applied after --units.
+    #[arg(long)]
+    transform: Option<String>,
+    /// Units of the file: m, cm or mm.
+    #[arg(long, default_value = "m")]
+    units: Units,
+    /// `auto` finds the dominant floor plane (RANSAC) and moves it to z = 0; `keep` trusts the file.
+    #[arg(long, default_value = "keep")]
+    floor: FloorMode,
+    /// Sample meshes (OBJ, OFF, STL, PLY with faces) at this many points per square metre.
+    #[arg(long)]
+    sample: Option<f64>,
+}
+
+impl InputArgs {
+    fn options(&self) -> Result<InputOptions, String> {
+        let transform = match &self.transform {
+            None => None,
+            Some(t) => {
+                let path = std::path::Path::new(t);
+                let text = if path.is_file() {
+                    std::fs::read_to_string(path).map_err(|e| format!("--transform {t}: {e}"))?
+                } else {
+                    t.clone()
+                };
+                Some(parse_matrix(&text).map_err(|e| format!("--transform {t}: {e}"))?)
+            }
+        };
+        if let Some(d) = self.sample {
+            if !(d.is_finite() && d > 0.0) {
+                return Err(format!(
+                    "--sample {d}: must be a positive density (points per square metre)"
+                ));
+            }
+        }
+        Ok(InputOptions {
+            frame: FrameOptions {
+                up: self.up,
+                transform,
+                units: self.units,
+                floor: self.floor,
+                camera: self.camera,
+            },
+            sample: self.sample,
+        })
+    }
+}
+
+#[derive(clap::Args)]
 struct InspectArgs {
     /// Point cloud file (metres, z up, floor at z = 0).
     file: PathBuf,
@@ -101,6 +159,8 @@ struct InspectArgs {
     png: PathBuf,
     #[command(flatten)]
     models: ModelArgs,
+    #[command(flatten)]
+    input: InputArgs,
 }
 
 #[derive(clap::Args)]
@@ -110,6 +170,8 @@ struct DetectArgs {
     files: Vec<PathBuf>,
     #[command(flatten)]
     models: ModelArgs,
+    #[command(flatten)]
+    input: InputArgs,
     /// Write detections as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -165,6 +227,13 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Detect(a) => {
+            let input = match a.input.options() {
+                Ok(i) => i,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
             if let Some(n) = a.threads {
                 if let Err(e) = rayon::ThreadPoolBuilder::new()
                     .num_threads(n)
@@ -185,6 +254,7 @@ fn main() -> ExitCode {
                 segments: a.segments,
                 mesh: a.mesh,
                 config: config(&a.models),
+                input,
                 quiet: a.quiet,
             };
             let code = run_detect(
@@ -227,7 +297,15 @@ fn main() -> ExitCode {
             ExitCode::from(code as u8)
         }
         Command::Inspect(a) => {
+            let input = match a.input.options() {
+                Ok(i) => i,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
             let req = InspectRequest {
+                input,
                 file: a.file,
                 agent: a.models.agent.clone(),
                 affordances: a.models.affordances.clone(),

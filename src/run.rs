@@ -8,6 +8,7 @@ use crate::agent::Agent;
 use crate::cloud;
 use crate::detect::{detect, DetectConfig};
 use crate::hierarchy::Hierarchy;
+use crate::input::{load_input, Input, InputOptions};
 use crate::model::ModelError;
 use crate::report::{self, FileReport};
 
@@ -34,6 +35,8 @@ pub struct DetectRequest {
     pub mesh: Option<PathBuf>,
     /// Scene-level numbers.
     pub config: DetectConfig,
+    /// How inputs are read and brought into the world frame.
+    pub input: InputOptions,
     /// No progress bar.
     pub quiet: bool,
 }
@@ -79,7 +82,7 @@ pub fn load_models_or_builtin(
     Ok((a, h))
 }
 
-/// Detects in one file.
+/// Detects in one file (already in metres, z up, floor at z = 0).
 pub fn detect_file(
     path: &Path,
     agent: &Agent,
@@ -87,15 +90,32 @@ pub fn detect_file(
     cfg: &DetectConfig,
 ) -> Result<FileReport, cloud::CloudError> {
     let loaded = cloud::load(path)?;
-    let outcome = detect(&loaded.cloud, agent, h, cfg);
-    Ok(FileReport {
+    Ok(report_of(
+        path,
+        &loaded.cloud,
+        loaded.dropped_non_finite,
+        agent,
+        h,
+        cfg,
+    ))
+}
+
+fn report_of(
+    path: &Path,
+    cloud: &cloud::PointCloud,
+    dropped: usize,
+    agent: &Agent,
+    h: &Hierarchy,
+    cfg: &DetectConfig,
+) -> FileReport {
+    FileReport {
         file: path.display().to_string(),
         height: agent.height,
         agent: agent.name.clone(),
         ids: h.ids().into_iter().map(String::from).collect(),
-        outcome,
-        dropped_non_finite: loaded.dropped_non_finite,
-    })
+        outcome: detect(cloud, agent, h, cfg),
+        dropped_non_finite: dropped,
+    }
 }
 
 /// Where a per-input output of `input` goes: `base` itself for a single input, otherwise
@@ -139,21 +159,20 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     let mut failed = 0usize;
     for path in &req.files {
         bar.set_message(path.display().to_string());
-        match detect_file(path, &agent, &h, &req.config) {
-            Ok(r) => {
-                if r.dropped_non_finite > 0 {
-                    let _ = bar.suspend(|| {
-                        writeln!(
-                            err,
-                            "warning: {}: dropped {} points with non-finite coordinates",
-                            path.display(),
-                            r.dropped_non_finite
-                        )
-                    });
-                }
+        match load_input(path, &req.input) {
+            Ok(input) => {
+                bar.suspend(|| notes(&input, path, err));
+                let r = report_of(
+                    path,
+                    &input.cloud,
+                    input.dropped_non_finite,
+                    &agent,
+                    &h,
+                    &req.config,
+                );
                 if let Some(base) = &req.segments {
                     let target = per_input_path(base, path, several);
-                    if let Err(e) = write_segments(path, &target, &r) {
+                    if let Err(e) = write_segments(&input, &target, &r) {
                         let _ = bar.suspend(|| writeln!(err, "error: {e}"));
                         failed += 1;
                     }
@@ -208,16 +227,33 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     }
 }
 
-/// Writes the input cloud again with the per-point detection index (-1 for none).
-fn write_segments(input: &Path, target: &Path, r: &FileReport) -> Result<(), cloud::CloudError> {
-    let loaded = cloud::load(input)?;
+/// Writes the input cloud (world frame) with the per-point detection index (-1 for none).
+fn write_segments(input: &Input, target: &Path, r: &FileReport) -> Result<(), cloud::CloudError> {
     let labels: Vec<f64> = r
         .outcome
         .labels
         .iter()
         .map(|l| l.map_or(-1.0, |i| i as f64))
         .collect();
-    cloud::write_ply_points(target, &loaded.cloud.points, &[("detection", labels)], true)
+    cloud::write_ply_points(target, &input.cloud.points, &[("detection", labels)], true)
+}
+
+/// The warnings and frame notes of an input, one line each.
+fn notes(input: &Input, path: &Path, err: &mut dyn Write) {
+    if input.dropped_non_finite > 0 {
+        let _ = writeln!(
+            err,
+            "warning: {}: dropped {} points with non-finite coordinates",
+            path.display(),
+            input.dropped_non_finite
+        );
+    }
+    if let Some(w) = &input.units_warning {
+        let _ = writeln!(err, "warning: {w}");
+    }
+    if let Some(f) = &input.frame {
+        let _ = writeln!(err, "{}: {f}", path.display());
+    }
 }
 
 /// Everything `afford inspect` was asked to do.
@@ -233,6 +269,8 @@ pub struct InspectRequest {
     pub height: f64,
     /// The picture to write.
     pub png: PathBuf,
+    /// How the input is read and brought into the world frame.
+    pub input: InputOptions,
     /// Scene-level numbers.
     pub config: DetectConfig,
 }
@@ -252,13 +290,14 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
             return 2;
         }
     };
-    let loaded = match cloud::load(&req.file) {
+    let loaded = match load_input(&req.file, &req.input) {
         Ok(l) => l,
         Err(e) => {
             let _ = writeln!(err, "error: {e}");
             return 2;
         }
     };
+    notes(&loaded, &req.file, err);
     let prepared = crate::detect::prepare(&loaded.cloud, &req.config);
     let hyps =
         crate::hypotheses::hypotheses(&prepared.map, &h.hypothesis, h.orientation, agent.height);

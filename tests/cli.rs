@@ -221,3 +221,55 @@ fn body_heights_outside_reason_are_refused() {
     assert_eq!(o.status.code(), Some(2));
     assert!(text(&o.stderr).contains("17.5"));
 }
+
+#[test]
+fn a_camera_frame_in_millimetres_with_auto_floor_gives_the_same_affordances() {
+    use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+    let d = tmp();
+    let world = afford::cloud::read_ply(Path::new(SAMPLE)).unwrap();
+    // A camera 1.6 m up, 3 m in front of the room, looking at it pitched 25 deg down:
+    // camera axes x right, y down, z forward.
+    let look = UnitQuaternion::face_towards(&Vector3::new(-0.9, 0.2, -0.42), &Vector3::z());
+    let cam_in_world = Isometry3::from_parts(Translation3::new(3.0, 0.3, 1.6), look);
+    // face_towards maps +z to the view direction and +y to up; the camera's y is down.
+    let flip = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI);
+    let world_to_cam =
+        (cam_in_world * Isometry3::from_parts(Translation3::identity(), flip)).inverse();
+    let cam: Vec<Point3<f64>> = world
+        .iter()
+        .map(|p| Point3::from((world_to_cam * p).coords * 1000.0))
+        .collect();
+    let file = d.path().join("camera.ply");
+    afford::cloud::write_ply_points(&file, &cam, &[], true).unwrap();
+    let direct = afford(&["detect", SAMPLE, "--summary", &p(d.path(), "a.csv")]);
+    assert!(direct.status.success());
+    let framed = afford(&[
+        "detect",
+        &file.display().to_string(),
+        "--camera",
+        "--units",
+        "mm",
+        "--floor",
+        "auto",
+        "--summary",
+        &p(d.path(), "b.csv"),
+    ]);
+    assert!(framed.status.success(), "{}", text(&framed.stderr));
+    assert!(
+        text(&framed.stderr).contains("frame:"),
+        "{}",
+        text(&framed.stderr)
+    );
+    let row = |f: &str| {
+        std::fs::read_to_string(d.path().join(f))
+            .unwrap()
+            .lines()
+            .nth(1)
+            .unwrap()
+            .split_once(',')
+            .unwrap()
+            .1
+            .to_string()
+    };
+    assert_eq!(row("a.csv"), row("b.csv"));
+}

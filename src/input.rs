@@ -1,0 +1,91 @@
+//! Turning a user's file into the cloud the detector needs: points or a sampled mesh,
+//! in metres, z up, with the floor at z = 0 (the environment P of section 3.1).
+
+use std::path::{Path, PathBuf};
+
+use crate::cloud::{self, CloudError, FrameError, FrameOptions, FrameReport, PointCloud};
+
+/// How input files are read and brought into the world frame.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct InputOptions {
+    /// Units, transform, up axis, camera frame and floor levelling.
+    pub frame: FrameOptions,
+    /// Sample meshes (and PLY files with faces) at this many points per square metre;
+    /// `None` reads PLY vertices as points and samples OBJ/OFF/STL at [`MESH_DENSITY`].
+    pub sample: Option<f64>,
+}
+
+/// Default surface density for meshes, points per square metre: 1 cm apart, so that every
+/// 2 cm voxel of a surface is hit.
+pub const MESH_DENSITY: f64 = 10_000.0;
+/// Seed of mesh sampling: the same mesh always gives the same points.
+const MESH_SEED: u64 = 0;
+
+/// A cloud ready for detection.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Input {
+    /// The points, world frame.
+    pub cloud: PointCloud,
+    /// Points dropped for a non-finite coordinate.
+    pub dropped_non_finite: usize,
+    /// What was done to bring it into the world frame, when anything was.
+    pub frame: Option<FrameReport>,
+    /// A warning about the units the extent suggests.
+    pub units_warning: Option<String>,
+}
+
+/// What went wrong turning a file into a world-frame cloud.
+#[derive(Debug, thiserror::Error)]
+pub enum InputError {
+    /// The file could not be read.
+    #[error(transparent)]
+    Cloud(#[from] CloudError),
+    /// The frame could not be established (no floor found, bad transform).
+    #[error("{path}: {source}")]
+    Frame {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: FrameError,
+    },
+}
+
+fn is_mesh(path: &Path) -> bool {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    matches!(ext.as_deref(), Some("obj" | "off" | "stl"))
+}
+
+/// Reads `path` (points, or a mesh sampled by area) and brings it into the world frame.
+pub fn load_input(path: &Path, opts: &InputOptions) -> Result<Input, InputError> {
+    let loaded = if is_mesh(path) || opts.sample.is_some() {
+        let mesh = cloud::read_mesh(path)?;
+        // Density is per square metre of the final cloud; the mesh is in the file's units.
+        let k = opts.frame.units.factor();
+        let density = opts.sample.unwrap_or(MESH_DENSITY) * k * k;
+        cloud::keep_finite(cloud::sample_mesh(&mesh, density, MESH_SEED).points)
+    } else {
+        cloud::load(path)?
+    };
+    let untouched = opts.frame == FrameOptions::default();
+    let (cloud, frame) = if untouched {
+        (loaded.cloud, None)
+    } else {
+        let (c, r) =
+            cloud::to_world(loaded.cloud, &opts.frame).map_err(|source| InputError::Frame {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        (c, Some(r))
+    };
+    let units_warning = cloud::check_units(&cloud).map(|w| format!("{}: {w}", path.display()));
+    Ok(Input {
+        cloud,
+        dropped_non_finite: loaded.dropped_non_finite,
+        frame,
+        units_warning,
+    })
+}
