@@ -367,6 +367,7 @@ pub fn evaluate(
     heights: &[f64],
     agent: Option<&Path>,
     affordances: Option<&Path>,
+    input: &crate::input::InputOptions,
     progress: bool,
 ) -> Result<Evaluation, EvalError> {
     let models = heights
@@ -396,7 +397,7 @@ pub fn evaluate(
     let outcomes: Vec<FileOutcome> = rows
         .par_iter()
         .map(|row| {
-            let loaded = cloud::load(&row.path).map_err(|e| e.to_string());
+            let loaded = crate::input::load_input(&row.path, input).map_err(|e| e.to_string());
             let parts = if row
                 .path
                 .extension()

@@ -73,6 +73,8 @@ struct EvalArgs {
     /// Write the scores as CSV.
     #[arg(long)]
     csv: Option<PathBuf>,
+    #[command(flatten)]
+    input: InputArgs,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -281,6 +283,13 @@ fn main() -> ExitCode {
             ExitCode::from(code as u8)
         }
         Command::Eval(a) => {
+            let input = match a.input.options() {
+                Ok(i) => i,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
             let code = afford::run::run_eval(
                 &afford::run::EvalRequest {
                     labels: a.labels,
@@ -289,6 +298,7 @@ fn main() -> ExitCode {
                     affordances: a.affordances,
                     json: a.json,
                     csv: a.csv,
+                    input,
                     quiet: a.quiet,
                 },
                 &mut std::io::stdout().lock(),

@@ -429,6 +429,8 @@ pub struct EvalRequest {
     pub json: Option<PathBuf>,
     /// CSV output.
     pub csv: Option<PathBuf>,
+    /// How the labelled files are read (units, frame, mesh sampling).
+    pub input: InputOptions,
     /// No progress bar.
     pub quiet: bool,
 }
@@ -441,6 +443,7 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
         &req.heights,
         req.agent.as_deref(),
         req.affordances.as_deref(),
+        &req.input,
         !req.quiet,
     ) {
         Ok(ev) => ev,
