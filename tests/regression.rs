@@ -42,6 +42,7 @@ fn no_f_score_drops_below_the_baseline() {
         &heights,
         None,
         None,
+        &Default::default(),
         false,
     )
     .unwrap();
