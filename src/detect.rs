@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use crate::agent::{Agent, Cylinder};
 use crate::cloud::PointCloud;
-use crate::fit::{fit, ContactConfig};
+use crate::fit::{fit, ContactConfig, Fit};
 use crate::heightmap::HeightMap;
 use crate::hierarchy::Hierarchy;
 use crate::hypotheses::{hypotheses, Hypothesis};
@@ -138,15 +138,18 @@ pub fn best_at(
 ) -> (Option<Unfolded>, usize) {
     let fits = fit(agent, h, scene, hyp, &cfg.contact);
     let n = fits.len();
-    let best = fits
+    // Section 4.2: the orientation with the best stability is kept. Stabilities within
+    // the hierarchy's band count as equal, and then the heading tried first (the nearest
+    // to the hypothesis heading) wins; if its root affordance is absent the next is tried.
+    let top = fits.iter().map(|f| f.stability).fold(0.0, f64::max);
+    let (equal, rest): (Vec<&Fit>, Vec<&Fit>) = fits
         .iter()
+        .partition(|f| f.stability >= top - h.fit.stability_band);
+    let best = equal
+        .into_iter()
+        .chain(rest)
         .map(|f| unfold(agent, h, scene, f, &cfg.contact))
-        .filter(|u| u.nodes.first().is_some_and(|r| r.found))
-        // First of equals wins: headings are tried in a fixed order.
-        .fold(None::<Unfolded>, |best, u| match best {
-            Some(b) if !u.stronger_than(&b, h.score.select) => Some(b),
-            _ => Some(u),
-        });
+        .find(|u| u.nodes.first().is_some_and(|r| r.found));
     (best, n)
 }
 

@@ -62,6 +62,8 @@ pub struct FitRule {
     pub sigma_d: f64,
     /// Stability (Eq. 1) below which a fit is discarded.
     pub min_stability: f64,
+    /// Stabilities within this much of the best count as equal when the orientation is chosen.
+    pub stability_band: f64,
     /// Spacing of the samples along each stability link (Eq. 1), metres.
     pub sample_spacing: f64,
     /// Links whose distances to the scene make the stability score (joint indices).
@@ -206,6 +208,7 @@ struct FitFile {
     max_drop: f64,
     sigma_d: f64,
     min_stability: f64,
+    stability_band: f64,
     sample_spacing: f64,
     stability_links: Vec<String>,
     #[serde(default)]
@@ -545,6 +548,7 @@ impl Hierarchy {
                 max_drop: f.max_drop,
                 sigma_d: f.sigma_d,
                 min_stability: f.min_stability,
+                stability_band: f.stability_band,
                 sample_spacing: f.sample_spacing,
                 stability_links,
                 unchecked_links,
