@@ -570,3 +570,65 @@ impl Hierarchy {
         self.nodes.iter().map(|n| n.id.as_str()).collect()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::run::{BUILTIN_AGENT, BUILTIN_SITTING};
+
+    fn agent() -> Agent {
+        Agent::from_toml(BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap()
+    }
+
+    fn load(text: &str) -> Result<Hierarchy, ModelError> {
+        Hierarchy::from_toml(text, Path::new("h.toml"), &agent())
+    }
+
+    #[test]
+    fn the_sitting_hierarchy_follows_fig_3() {
+        let h = load(BUILTIN_SITTING).unwrap();
+        let ids = h.ids();
+        assert_eq!(ids[0], "sitting");
+        let parent = |id: &str| {
+            let n = &h.nodes[ids.iter().position(|i| *i == id).unwrap()];
+            n.parent.map(|p| h.nodes[p].id.as_str())
+        };
+        assert_eq!(parent("backrest"), Some("sitting"));
+        assert_eq!(parent("armrest"), Some("sitting"));
+        assert_eq!(parent("headrest"), Some("backrest"));
+        assert!(h.nodes.iter().all(|n| n.when));
+        // Degrees in the file, radians here.
+        let knee = &h.nodes[0].sweeps[0];
+        assert!((knee.thetad - 85f64.to_radians()).abs() < 1e-12);
+        assert!(
+            (h.initial.angles[agent().joint_index("hip_l").unwrap()] - 90f64.to_radians()).abs()
+                < 1e-12
+        );
+    }
+
+    #[test]
+    fn bad_hierarchies_name_the_key() {
+        let swapped =
+            BUILTIN_SITTING.replace("theta1 = 0.0, theta2 = 30.0", "theta1 = 30.0, theta2 = 0.0");
+        let e = load(&swapped).unwrap_err().to_string();
+        assert!(
+            e.contains("node.headrest.sweep.neck.theta1") && e.contains("exceeds"),
+            "{e}"
+        );
+        let orphan = BUILTIN_SITTING.replace("parent = \"backrest\"", "parent = \"back\"");
+        let e = load(&orphan).unwrap_err().to_string();
+        assert!(
+            e.contains("node.headrest.parent") && e.contains("missing node `back`"),
+            "{e}"
+        );
+        let unknown = BUILTIN_SITTING.replace("links = [\"torso\"]", "links = [\"trunk\"]");
+        let e = load(&unknown).unwrap_err().to_string();
+        assert!(
+            e.contains("node.backrest.links") && e.contains("unknown link `trunk`"),
+            "{e}"
+        );
+        let typo = BUILTIN_SITTING.replace("free_start = true", "free_starts = true");
+        let e = load(&typo).unwrap_err().to_string();
+        assert!(e.starts_with("h.toml:") && e.contains("free_starts"), "{e}");
+    }
+}
