@@ -18,6 +18,7 @@ pub use frame::{
 };
 pub use mesh::{read_mesh, sample_mesh};
 pub use pcd::{read_pcd, write_pcd};
+pub(crate) use ply::Scalar;
 pub use ply::{read_ply, read_ply_property, write_ply_points};
 pub use xyz::read_xyz;
 

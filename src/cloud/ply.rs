@@ -81,9 +81,9 @@ pub(super) fn io_err(path: &Path, source: io::Error) -> CloudError {
     }
 }
 
-/// A PLY scalar type.
+/// A PLY scalar type (shared with the mesh reader of `synth::meshio`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Scalar {
+pub(crate) enum Scalar {
     I8,
     U8,
     I16,
@@ -95,7 +95,7 @@ enum Scalar {
 }
 
 impl Scalar {
-    fn parse(s: &str) -> Option<Scalar> {
+    pub(crate) fn parse(s: &str) -> Option<Scalar> {
         Some(match s {
             "char" | "int8" => Scalar::I8,
             "uchar" | "uint8" => Scalar::U8,
@@ -109,7 +109,7 @@ impl Scalar {
         })
     }
 
-    fn size(self) -> usize {
+    pub(crate) fn size(self) -> usize {
         match self {
             Scalar::I8 | Scalar::U8 => 1,
             Scalar::I16 | Scalar::U16 => 2,
@@ -123,7 +123,7 @@ impl Scalar {
     }
 
     /// Decodes `b` (exactly `self.size()` bytes) as a number.
-    fn decode(self, b: &[u8], big: bool) -> f64 {
+    pub(crate) fn decode(self, b: &[u8], big: bool) -> f64 {
         macro_rules! num {
             ($t:ty, $n:expr) => {{
                 let mut a = [0u8; $n];

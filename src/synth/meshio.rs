@@ -6,6 +6,7 @@
 //! more than three corners are split into a triangle fan. Units are taken as they are
 //! (the real models are metres, z up).
 
+use crate::cloud::Scalar;
 use std::path::{Path, PathBuf};
 
 use nalgebra::Point3;
@@ -34,71 +35,11 @@ pub enum MeshError {
     },
 }
 
-#[derive(Clone, Copy, Debug)]
-enum Ty {
-    I8,
-    U8,
-    I16,
-    U16,
-    I32,
-    U32,
-    F32,
-    F64,
-}
-
-impl Ty {
-    fn parse(s: &str) -> Option<Ty> {
-        Some(match s {
-            "char" | "int8" => Ty::I8,
-            "uchar" | "uint8" => Ty::U8,
-            "short" | "int16" => Ty::I16,
-            "ushort" | "uint16" => Ty::U16,
-            "int" | "int32" => Ty::I32,
-            "uint" | "uint32" => Ty::U32,
-            "float" | "float32" => Ty::F32,
-            "double" | "float64" => Ty::F64,
-            _ => return None,
-        })
-    }
-
-    fn size(self) -> usize {
-        match self {
-            Ty::I8 | Ty::U8 => 1,
-            Ty::I16 | Ty::U16 => 2,
-            Ty::I32 | Ty::U32 | Ty::F32 => 4,
-            Ty::F64 => 8,
-        }
-    }
-
-    fn decode(self, b: &[u8], big: bool) -> f64 {
-        macro_rules! num {
-            ($t:ty, $n:expr) => {{
-                let a: [u8; $n] = b[..$n].try_into().unwrap();
-                (if big {
-                    <$t>::from_be_bytes(a)
-                } else {
-                    <$t>::from_le_bytes(a)
-                }) as f64
-            }};
-        }
-        match self {
-            Ty::I8 => b[0] as i8 as f64,
-            Ty::U8 => b[0] as f64,
-            Ty::I16 => num!(i16, 2),
-            Ty::U16 => num!(u16, 2),
-            Ty::I32 => num!(i32, 4),
-            Ty::U32 => num!(u32, 4),
-            Ty::F32 => num!(f32, 4),
-            Ty::F64 => num!(f64, 8),
-        }
-    }
-}
-
 struct Prop {
     name: String,
     /// `Some(count type)` for a list.
-    list: Option<Ty>,
-    ty: Ty,
+    list: Option<Scalar>,
+    ty: Scalar,
 }
 
 struct Elem {
@@ -142,7 +83,7 @@ pub fn read_mesh_ply(path: &Path) -> Result<Mesh, MeshError> {
                 props: Vec::new(),
             }),
             ["property", "list", c, i, name] => {
-                let (Some(c), Some(i)) = (Ty::parse(c), Ty::parse(i)) else {
+                let (Some(c), Some(i)) = (Scalar::parse(c), Scalar::parse(i)) else {
                     return Err(err(format!("bad list property '{line}'")));
                 };
                 let e = elems
@@ -155,7 +96,7 @@ pub fn read_mesh_ply(path: &Path) -> Result<Mesh, MeshError> {
                 });
             }
             ["property", ty, name] => {
-                let ty = Ty::parse(ty).ok_or_else(|| err(format!("bad property '{line}'")))?;
+                let ty = Scalar::parse(ty).ok_or_else(|| err(format!("bad property '{line}'")))?;
                 let e = elems
                     .last_mut()
                     .ok_or_else(|| err("property before element".into()))?;
