@@ -963,7 +963,7 @@ struct Scene {
 }
 
 /// Least visible area of a seat or lying surface (m^2) for its labels to count in a view:
-/// about a 0.22 m square, under which the hip-breadth template (0.33 m across at 1.75 m)
+/// about a 0.22 m square, under which the torso template (0.30 m across at 1.75 m)
 /// cannot rest on it, and neither could a person judging the picture.
 const MIN_VISIBLE_SEAT_M2: f64 = 0.05;
 
