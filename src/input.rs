@@ -89,3 +89,57 @@ pub fn load_input(path: &Path, opts: &InputOptions) -> Result<Input, InputError>
         units_warning,
     })
 }
+
+/// Extensions taken from a folder (clouds and meshes), lower case. Text clouds named
+/// `.txt` or `.csv` are read when given by name, but not picked out of a folder, where
+/// such files are usually labels and notes.
+pub const EXTENSIONS: [&str; 6] = ["ply", "pcd", "xyz", "obj", "off", "stl"];
+
+/// Expands the inputs of a run: a folder stands for the files in it with one of
+/// [`EXTENSIONS`] (not recursive), sorted by name; files are kept as given.
+pub fn expand_inputs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, CloudError> {
+    let mut out = Vec::new();
+    for p in paths {
+        if p.is_dir() {
+            let entries = std::fs::read_dir(p).map_err(|source| CloudError::Io {
+                path: p.clone(),
+                source,
+            })?;
+            let mut files: Vec<PathBuf> = entries
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|f| {
+                    f.is_file()
+                        && f.extension()
+                            .and_then(|e| e.to_str())
+                            .is_some_and(|e| EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
+                })
+                .collect();
+            files.sort();
+            out.extend(files);
+        } else {
+            out.push(p.clone());
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_folder_expands_to_its_clouds_in_name_order() {
+        let d = tempfile::tempdir().unwrap();
+        for f in ["b.ply", "a.pcd", "notes.md", "c.STL"] {
+            std::fs::write(d.path().join(f), b"x").unwrap();
+        }
+        std::fs::create_dir(d.path().join("sub.ply")).unwrap();
+        let single = d.path().join("z.xyz");
+        let got = expand_inputs(&[d.path().to_path_buf(), single.clone()]).unwrap();
+        let names: Vec<String> = got
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, ["a.pcd", "b.ply", "c.STL", "z.xyz"]);
+    }
+}

@@ -167,7 +167,8 @@ struct InspectArgs {
 
 #[derive(clap::Args)]
 struct DetectArgs {
-    /// Point cloud files (metres, z up, floor at z = 0).
+    /// Point clouds or meshes (metres, z up, floor at z = 0, unless said otherwise below),
+    /// or folders of them.
     #[arg(required = true)]
     files: Vec<PathBuf>,
     #[command(flatten)]

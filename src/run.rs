@@ -149,15 +149,22 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             return 2;
         }
     };
-    let several = req.files.len() > 1;
+    let files = match crate::input::expand_inputs(&req.files) {
+        Ok(f) => f,
+        Err(e) => {
+            let _ = writeln!(err, "error: {e}");
+            return 2;
+        }
+    };
+    let several = files.len() > 1;
     let bar = if req.quiet || !several {
         indicatif::ProgressBar::hidden()
     } else {
-        indicatif::ProgressBar::new(req.files.len() as u64)
+        indicatif::ProgressBar::new(files.len() as u64)
     };
     let mut reports = Vec::new();
     let mut failed = 0usize;
-    for path in &req.files {
+    for path in &files {
         bar.set_message(path.display().to_string());
         match load_input(path, &req.input) {
             Ok(input) => {
@@ -218,7 +225,7 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
         }
     }
     if several {
-        let _ = writeln!(err, "{} files, {} failed", req.files.len(), failed);
+        let _ = writeln!(err, "{} files, {} failed", files.len(), failed);
     }
     if failed > 0 {
         2
