@@ -302,6 +302,45 @@ impl Evaluation {
                 h.iou_files
             ));
         }
+        for h in &self.heights {
+            if h.mistakes.is_empty() {
+                continue;
+            }
+            s.push_str(&format!(
+                "\nWrong files at {:.2} m (false positives / false negatives):\n\n",
+                h.height
+            ));
+            for m in &h.mistakes {
+                let list = |v: &Vec<String>| {
+                    if v.is_empty() {
+                        "-".to_string()
+                    } else {
+                        v.join(", ")
+                    }
+                };
+                s.push_str(&format!(
+                    "- {}: FP {}; FN {}\n",
+                    m.file,
+                    list(&m.false_positives),
+                    list(&m.false_negatives)
+                ));
+            }
+        }
+        for h in &self.heights {
+            let found: Vec<String> = h
+                .doubtful_found
+                .iter()
+                .filter(|(_, f)| !f.is_empty())
+                .map(|(file, f)| format!("{file} ({})", f.join(", ")))
+                .collect();
+            if !found.is_empty() {
+                s.push_str(&format!(
+                    "\nDoubtful files with affordances found at {:.2} m: {}\n",
+                    h.height,
+                    found.join("; ")
+                ));
+            }
+        }
         if !self.failed.is_empty() {
             s.push_str("\nFailed files:\n\n");
             for (f, e) in &self.failed {
