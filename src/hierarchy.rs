@@ -96,6 +96,8 @@ pub struct ScoreRule {
     pub support_cos: f64,
     /// How poses and detections are ranked.
     pub select: Selection,
+    /// Local score (Eq. 3-4) below which a contact does not count as the affordance.
+    pub min_local: f64,
 }
 
 /// One joint constraint (theta1, theta2, theta_d, axis, joint) of J_F.
@@ -222,6 +224,7 @@ struct ScoreFile {
     epsilon: f64,
     support_angle: f64,
     select: Selection,
+    min_local: f64,
 }
 
 #[derive(Deserialize)]
@@ -558,6 +561,7 @@ impl Hierarchy {
                 epsilon: file.score.epsilon,
                 support_cos: file.score.support_angle.to_radians().cos(),
                 select: file.score.select,
+                min_local: file.score.min_local,
             },
             suppression_radius: file.suppression_radius,
             initial,

@@ -236,6 +236,8 @@ fn unfold_node(
     }
     let (found, local, node_posture) = outcome.expect("at least one setting");
     *posture = node_posture;
+    // A contact far from every preferred angle is no use of the affordance.
+    let found = found && local >= h.score.min_local;
     if !found {
         for c in &node.clamps {
             posture.angles[c.joint] = before.angles[c.joint];
