@@ -27,6 +27,21 @@ enum Command {
     Synth(SynthArgs),
     /// Score detection against a labels.csv: precision, recall and F per affordance.
     Eval(EvalArgs),
+    /// Convert a cloud or mesh to PLY or PCD in the detector's frame (metres, z up, floor at 0).
+    Convert(ConvertArgs),
+}
+
+#[derive(clap::Args)]
+struct ConvertArgs {
+    /// Input cloud or mesh (PLY, PCD, XYZ/CSV, OBJ, OFF, STL).
+    input: PathBuf,
+    /// Output file: .ply (binary unless --ascii) or .pcd (binary).
+    output: PathBuf,
+    /// Write ascii PLY.
+    #[arg(long)]
+    ascii: bool,
+    #[command(flatten)]
+    input_frame: InputArgs,
 }
 
 #[derive(clap::Args)]
@@ -302,6 +317,27 @@ fn main() -> ExitCode {
                     input,
                     quiet: a.quiet,
                 },
+                &mut std::io::stdout().lock(),
+                &mut std::io::stderr().lock(),
+            );
+            ExitCode::from(code as u8)
+        }
+        Command::Convert(a) => {
+            let options = match a.input_frame.options() {
+                Ok(i) => i,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            let req = afford::run::ConvertRequest {
+                input: a.input,
+                output: a.output,
+                ascii: a.ascii,
+                options,
+            };
+            let code = afford::run::run_convert(
+                &req,
                 &mut std::io::stdout().lock(),
                 &mut std::io::stderr().lock(),
             );

@@ -474,3 +474,65 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
     }
     code
 }
+
+/// Everything `afford convert` was asked to do.
+#[derive(Debug, Clone)]
+pub struct ConvertRequest {
+    /// The input cloud or mesh.
+    pub input: PathBuf,
+    /// The output: `.ply` or `.pcd`.
+    pub output: PathBuf,
+    /// Write ascii PLY instead of binary.
+    pub ascii: bool,
+    /// How the input is read and brought into the world frame.
+    pub options: InputOptions,
+}
+
+/// Runs `afford convert`: reads any input the detector reads (with the same frame options)
+/// and writes it as PLY (binary or ascii) or binary PCD, in metres, z up, floor at z = 0.
+pub fn run_convert(req: &ConvertRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    let input = match load_input(&req.input, &req.options) {
+        Ok(i) => i,
+        Err(e) => {
+            let _ = writeln!(err, "error: {e}");
+            return 2;
+        }
+    };
+    notes(&input, &req.input, err);
+    let ext = req
+        .output
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let written = match ext.as_deref() {
+        Some("ply") => cloud::write_ply_points(&req.output, &input.cloud.points, &[], !req.ascii),
+        Some("pcd") if !req.ascii => cloud::write_pcd(&req.output, &input.cloud.points),
+        Some("pcd") => {
+            let _ = writeln!(
+                err,
+                "error: {}: ascii output is written as PLY only",
+                req.output.display()
+            );
+            return 2;
+        }
+        _ => {
+            let _ = writeln!(err, "error: {}: write .ply or .pcd", req.output.display());
+            return 2;
+        }
+    };
+    match written {
+        Ok(()) => {
+            let _ = writeln!(
+                out,
+                "{}: {} points",
+                req.output.display(),
+                input.cloud.len()
+            );
+            0
+        }
+        Err(e) => {
+            let _ = writeln!(err, "error: {e}");
+            2
+        }
+    }
+}

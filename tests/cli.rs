@@ -273,3 +273,23 @@ fn a_camera_frame_in_millimetres_with_auto_floor_gives_the_same_affordances() {
     };
     assert_eq!(row("a.csv"), row("b.csv"));
 }
+
+#[test]
+fn convert_round_trips_through_pcd_and_ascii_ply() {
+    let d = tmp();
+    let pcd = p(d.path(), "room.pcd");
+    let ply = p(d.path(), "room.ply");
+    assert!(afford(&["convert", SAMPLE, &pcd]).status.success());
+    let o = afford(&["convert", &pcd, &ply, "--ascii"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let a = afford::cloud::read_ply(Path::new(SAMPLE)).unwrap();
+    let b = afford::cloud::read_ply(Path::new(&ply)).unwrap();
+    assert_eq!(a.len(), b.len());
+    assert!(
+        a.iter().zip(&b).all(|(x, y)| (x - y).norm() < 1e-6),
+        "same points, f32 precision"
+    );
+    let bad = afford(&["convert", SAMPLE, &p(d.path(), "room.las")]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(text(&bad.stderr).contains("room.las"));
+}
