@@ -106,8 +106,8 @@ fn fit_headings(
             yaw,
         };
         let mut parts: Vec<Cylinder> = Vec::new();
+        let mut f = Vec::new();
         let mut pose = |t: f64, out: &mut Vec<Cylinder>| {
-            let mut f = Vec::new();
             agent.forward_kinematics(&at(start_z - t * drop), posture, &mut f);
             *out = agent.cylinders(&f, |j| !h.fit.unchecked_links.contains(&j));
         };

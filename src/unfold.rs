@@ -268,10 +268,10 @@ fn sweep_branch(
             (sw.theta2 - sw.theta1) * agent.reach(sw.joint)
         })
         .sum();
-    let base = posture.clone();
+    // Only the branch's joints move; they are rewritten at every step.
+    let mut p = posture.clone();
     let mut frames = Vec::new();
     let mut motion = |t: f64, out: &mut Vec<Cylinder>| {
-        let mut p = base.clone();
         for &s in branch {
             let sw = &node.sweeps[s];
             p.angles[sw.joint] = sw.theta1 + t * (sw.theta2 - sw.theta1);

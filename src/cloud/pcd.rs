@@ -11,12 +11,10 @@ use std::path::Path;
 use nalgebra::{Point3, Quaternion, UnitQuaternion, Vector3};
 
 use super::ply::{
-    body_err, header_err, io_err, read_line_capped, shorten, Line, MAX_HEADER_LINE, MAX_PREALLOC,
+    body_err, header_err, io_err, next_header_line, read_line_capped, shorten, Line, MAX_PREALLOC,
 };
 use super::CloudError;
 
-/// Most header lines accepted before `DATA`.
-const MAX_HEADER_LINES: usize = 10_000;
 /// Largest output one LZF input byte can produce (a 3-byte back reference yields 264 bytes).
 const LZF_MAX_RATIO: u64 = 88;
 
@@ -100,25 +98,14 @@ fn parse_header<R: io::BufRead>(path: &Path, r: &mut R) -> Result<Header, CloudE
     let data = loop {
         lineno += 1;
         let at = format!("line {lineno}");
-        if lineno > MAX_HEADER_LINES {
-            return Err(header_err(path, at, "header too long (no 'DATA' line)"));
-        }
-        let bytes = match read_line_capped(r, MAX_HEADER_LINE).map_err(|e| io_err(path, e))? {
-            Line::Eof if lineno == 1 => return Err(header_err(path, at, "empty file")),
-            Line::Eof => return Err(header_err(path, at, "file ends before the 'DATA' line")),
-            Line::TooLong => return Err(header_err(path, at, "header line too long")),
-            Line::Text(b, n) => {
-                len += n as u64;
-                b
-            }
-        };
-        let Ok(text) = std::str::from_utf8(&bytes) else {
-            return Err(header_err(
-                path,
-                at,
-                "header line is not text (not a PCD file?)",
-            ));
-        };
+        let text = next_header_line(
+            path,
+            r,
+            lineno,
+            &mut len,
+            "the 'DATA' line",
+            "header line is not text (not a PCD file?)",
+        )?;
         let text = text.trim_start_matches('\u{feff}').trim();
         if text.is_empty() || text.starts_with('#') {
             continue;

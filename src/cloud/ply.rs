@@ -15,8 +15,8 @@ use super::CloudError;
 
 /// Longest header line accepted, in bytes (longer means the file is not a PLY header).
 pub(super) const MAX_HEADER_LINE: usize = 64 * 1024;
-/// Most header lines accepted before `end_header`.
-const MAX_HEADER_LINES: usize = 100_000;
+/// Most header lines accepted before `end_header` (PLY) or `DATA` (PCD).
+pub(super) const MAX_HEADER_LINES: usize = 100_000;
 /// Most points reserved up front; the vector grows beyond this only as data is really read.
 pub(super) const MAX_PREALLOC: usize = 1 << 20;
 
@@ -204,6 +204,33 @@ struct Header {
     lines: usize,
 }
 
+/// Reads header line `lineno` (1-based) of a PLY or PCD file: at most [`MAX_HEADER_LINE`]
+/// bytes, as text, counting the bytes taken into `len`. The errors name the line and say
+/// the header has no `end` marker, or is `not_text`.
+pub(super) fn next_header_line<R: BufRead>(
+    path: &Path,
+    r: &mut R,
+    lineno: usize,
+    len: &mut u64,
+    end: &str,
+    not_text: &str,
+) -> Result<String, CloudError> {
+    let at = format!("line {lineno}");
+    if lineno > MAX_HEADER_LINES {
+        return Err(header_err(path, at, format!("header too long (no {end})")));
+    }
+    let bytes = match read_line_capped(r, MAX_HEADER_LINE).map_err(|e| io_err(path, e))? {
+        Line::Eof if lineno == 1 => return Err(header_err(path, at, "empty file")),
+        Line::Eof => return Err(header_err(path, at, format!("file ends before {end}"))),
+        Line::TooLong => return Err(header_err(path, at, "header line too long")),
+        Line::Text(b, n) => {
+            *len += n as u64;
+            b
+        }
+    };
+    String::from_utf8(bytes).map_err(|_| header_err(path, at, not_text))
+}
+
 fn parse_header<R: BufRead>(path: &Path, r: &mut R) -> Result<Header, CloudError> {
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
@@ -212,26 +239,12 @@ fn parse_header<R: BufRead>(path: &Path, r: &mut R) -> Result<Header, CloudError
     loop {
         lineno += 1;
         let at = format!("line {lineno}");
-        if lineno > MAX_HEADER_LINES {
-            return Err(header_err(path, at, "header too long (no 'end_header')"));
-        }
-        let bytes = match read_line_capped(r, MAX_HEADER_LINE).map_err(|e| io_err(path, e))? {
-            Line::Eof if lineno == 1 => return Err(header_err(path, at, "empty file")),
-            Line::Eof => return Err(header_err(path, at, "file ends before 'end_header'")),
-            Line::TooLong => return Err(header_err(path, at, "header line too long")),
-            Line::Text(b, n) => {
-                len += n as u64;
-                b
-            }
+        let not_text = if lineno == 1 {
+            "not a PLY file (first line is not 'ply')"
+        } else {
+            "header line is not text"
         };
-        let Ok(text) = std::str::from_utf8(&bytes) else {
-            let what = if lineno == 1 {
-                "not a PLY file (first line is not 'ply')"
-            } else {
-                "header line is not text"
-            };
-            return Err(header_err(path, at, what));
-        };
+        let text = next_header_line(path, r, lineno, &mut len, "'end_header'", not_text)?;
         let words: Vec<&str> = text.split_whitespace().collect();
         if lineno == 1 {
             if words != ["ply"] {
