@@ -127,6 +127,8 @@ mod tests {
 
     fn detection(affordances: &[&str], parts: Vec<Cylinder>) -> Detection {
         Detection {
+            agent: "human".into(),
+            height: 1.75,
             hierarchy: "sitting".into(),
             position: Point3::origin(),
             yaw: 0.0,

@@ -10,6 +10,7 @@ use crate::fit::{fit, ContactConfig, Fit};
 use crate::heightmap::HeightMap;
 use crate::hierarchy::Hierarchy;
 use crate::hypotheses::{hypotheses, Hypothesis};
+use crate::model_set::Model;
 use crate::scene::{Scene, SceneConfig};
 use crate::select::{segment, suppress, SegmentConfig};
 use crate::unfold::{unfold, Unfolded};
@@ -61,6 +62,10 @@ impl Default for DetectConfig {
 pub struct Detection {
     /// Hierarchy name (`sitting`).
     pub hierarchy: String,
+    /// The body: agent name (`human`).
+    pub agent: String,
+    /// The body: height, metres.
+    pub height: f64,
     /// The agent's root joint (pelvis), world frame, metres.
     pub position: Point3<f64>,
     /// Heading about z, radians (0 faces +x).
@@ -159,6 +164,16 @@ pub fn detect(cloud: &PointCloud, agent: &Agent, h: &Hierarchy, cfg: &DetectConf
     detect_prepared(cloud, &prepared, agent, h, cfg)
 }
 
+/// Runs the method on `cloud` for every model of a set (each body with each hierarchy),
+/// building the height map and the voxelised scene once for all of them.
+pub fn detect_all(cloud: &PointCloud, models: &[Model], cfg: &DetectConfig) -> Vec<Outcome> {
+    let prepared = prepare(cloud, cfg);
+    models
+        .iter()
+        .map(|m| detect_prepared(cloud, &prepared, &m.agent, &m.hierarchy, cfg))
+        .collect()
+}
+
 /// Runs the method on a prepared scene (shared between hierarchies and bodies).
 pub fn detect_prepared(
     cloud: &PointCloud,
@@ -228,6 +243,8 @@ fn to_detection(agent: &Agent, h: &Hierarchy, hyp: &Hypothesis, u: &Unfolded) ->
     let seat = Point3::new(p.x, p.y, if bottom.is_finite() { bottom } else { p.z });
     Detection {
         hierarchy: h.name.clone(),
+        agent: agent.name.clone(),
+        height: agent.height,
         position: p,
         yaw: u.placement.yaw.rem_euclid(std::f64::consts::TAU),
         seat,

@@ -26,10 +26,10 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::cloud;
-use crate::detect::{detect, DetectConfig};
+use crate::detect::{detect_all, DetectConfig};
 use crate::model::ModelError;
+use crate::model_set::{ids as ids_of, load_set, Source};
 use crate::report::{self, FileReport};
-use crate::run::load_models_or_builtin;
 
 /// What went wrong before any file could be scored.
 #[derive(Debug, thiserror::Error)]
@@ -404,23 +404,20 @@ type FileOutcome = Result<Vec<(Vec<String>, Option<f64>)>, String>;
 pub fn evaluate(
     labels_csv: &Path,
     heights: &[f64],
-    agent: Option<&Path>,
-    affordances: Option<&Path>,
+    agent: &Source,
+    hierarchies: &[Source],
     input: &crate::input::InputOptions,
     progress: bool,
 ) -> Result<Evaluation, EvalError> {
     let models = heights
         .iter()
-        .map(|&h| load_models_or_builtin(agent, affordances, h))
+        .map(|&h| load_set(std::slice::from_ref(agent), hierarchies, &[h]))
         .collect::<Result<Vec<_>, _>>()?;
     let text = std::fs::read_to_string(labels_csv).map_err(|source| EvalError::Io {
         path: labels_csv.to_path_buf(),
         source,
     })?;
-    let hier_ids: Vec<String> = models
-        .first()
-        .map(|(_, h)| h.ids().into_iter().map(String::from).collect())
-        .unwrap_or_default();
+    let hier_ids: Vec<String> = models.first().map(|m| ids_of(m)).unwrap_or_default();
     let id_refs: Vec<&str> = hier_ids.iter().map(String::as_str).collect();
     let base = labels_csv.parent().unwrap_or(Path::new("."));
     let (rows, ids) = parse_labels(&text, &id_refs, base).map_err(|what| EvalError::Labels {
@@ -453,17 +450,17 @@ pub fn evaluate(
                     .map(|p| p.iter().map(|&c| (1.0..=5.0).contains(&c)).collect());
                 models
                     .iter()
-                    .map(|(agent, h)| {
-                        let outcome = detect(&loaded.cloud, agent, h, &cfg);
-                        let r = FileReport {
-                            file: row.file.clone(),
-                            height: agent.height,
-                            agent: agent.name.clone(),
-                            ids: h.ids().into_iter().map(String::from).collect(),
-                            outcome,
-                            dropped_non_finite: loaded.dropped_non_finite,
-                        };
-                        let found: Vec<String> = report::affords(&r).into_iter().cloned().collect();
+                    .map(|set| {
+                        let outcomes = detect_all(&loaded.cloud, set, &cfg);
+                        let r = FileReport::new(
+                            row.file.clone(),
+                            loaded.cloud.len(),
+                            loaded.dropped_non_finite,
+                            set,
+                            outcomes,
+                        );
+                        let found: Vec<String> =
+                            report::affords(&r, None).into_iter().cloned().collect();
                         let positive = ["sitting", "lying"]
                             .iter()
                             .any(|id| row.labels.get(*id) == Some(&true));
@@ -471,8 +468,7 @@ pub fn evaluate(
                             .as_ref()
                             .filter(|t| positive && t.contains(&true))
                             .and_then(|t| {
-                                let s: Vec<bool> =
-                                    r.outcome.labels.iter().map(Option::is_some).collect();
+                                let s: Vec<bool> = r.labels.iter().map(Option::is_some).collect();
                                 iou(&s, t)
                             });
                         (found, seg)

@@ -145,6 +145,26 @@ pub struct Node {
     /// Whether a contact already at theta1 is refused: the links had no room to unfold
     /// (shanks that start in a mattress are not hanging from a seat).
     pub free_start: bool,
+    /// Whether one touching kinematic branch suffices for the affordance, or all must touch.
+    pub contact: ContactRule,
+    /// Parts that must rest on the scene at a contact (an extension of the paper: lying
+    /// needs the back of the head and the heels supported, not only the trunk): at the
+    /// contact, some part of each branch's support links (joint index, span) must have the
+    /// scene within `support_gap` straight below it. Empty: any contact counts.
+    pub support: Vec<(usize, [f64; 2])>,
+    /// See `support`, metres.
+    pub support_gap: f64,
+}
+
+/// How many of a node's kinematic branches must touch for its affordance to be found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactRule {
+    /// One branch (the paper: "either a collision occurred or not"); one armrest suffices.
+    #[default]
+    Any,
+    /// Every branch (an extension: lying needs the head and both heels supported).
+    All,
 }
 
 /// A joint held within `[lower, upper]` (radians) while a node is judged.
@@ -245,6 +265,12 @@ struct NodeFile {
     release: Option<[f64; 3]>,
     #[serde(default)]
     free_start: bool,
+    #[serde(default)]
+    contact: ContactRule,
+    #[serde(default)]
+    support: Vec<LinkRef>,
+    #[serde(default)]
+    support_gap: f64,
 }
 
 #[derive(Deserialize)]
@@ -410,25 +436,36 @@ impl Hierarchy {
         for &i in &order {
             let n = &file.node[i];
             let key = |k: &str| format!("node.{}.{k}", n.id);
-            let mut links = Vec::new();
-            let mut spans = Vec::new();
-            for l in &n.links {
-                let (name, span) = match l {
-                    LinkRef::Name(name) => (name, [0.0, 1.0]),
-                    LinkRef::Span { link, span } => (link, *span),
-                };
-                if !(0.0..=1.0).contains(&span[0])
-                    || !(0.0..=1.0).contains(&span[1])
-                    || span[0] >= span[1]
-                {
-                    return Err(invalid(
-                        path,
-                        key(&format!("links.{name}.span")),
-                        "needs 0 <= from < to <= 1",
-                    ));
+            let spanned = |field: &str, refs: &[LinkRef]| {
+                let mut out = Vec::new();
+                for l in refs {
+                    let (name, span) = match l {
+                        LinkRef::Name(name) => (name, [0.0, 1.0]),
+                        LinkRef::Span { link, span } => (link, *span),
+                    };
+                    if !(0.0..=1.0).contains(&span[0])
+                        || !(0.0..=1.0).contains(&span[1])
+                        || span[0] >= span[1]
+                    {
+                        return Err(invalid(
+                            path,
+                            key(&format!("{field}.{name}.span")),
+                            "needs 0 <= from < to <= 1",
+                        ));
+                    }
+                    out.push((link(key(field), name)?, span));
                 }
-                links.push(link(key("links"), name)?);
-                spans.push(span);
+                Ok(out)
+            };
+            let (links, spans): (Vec<usize>, Vec<[f64; 2]>) =
+                spanned("links", &n.links)?.into_iter().unzip();
+            let support = spanned("support", &n.support)?;
+            if !(n.support_gap.is_finite() && n.support_gap >= 0.0) {
+                return Err(invalid(
+                    path,
+                    key("support_gap"),
+                    "must be 0 or more metres",
+                ));
             }
             if links.is_empty() {
                 return Err(invalid(
@@ -537,6 +574,9 @@ impl Hierarchy {
                     r => r,
                 },
                 free_start: n.free_start,
+                contact: n.contact,
+                support,
+                support_gap: n.support_gap,
             });
         }
         let f = &file.fit;

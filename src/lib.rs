@@ -21,6 +21,7 @@ pub mod hierarchy;
 pub mod hypotheses;
 pub mod input;
 pub mod model;
+pub mod model_set;
 pub mod render;
 pub mod report;
 pub mod run;

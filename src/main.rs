@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use afford::cloud::{parse_matrix, FloorMode, FrameOptions, Units, Up};
 use afford::detect::DetectConfig;
 use afford::input::InputOptions;
-use afford::run::{run_detect, run_inspect, DetectRequest, InspectRequest};
+use afford::run::{run_detect, run_inspect, DetectRequest, InspectRequest, ModelChoice};
 use clap::{Parser, Subcommand};
 
 /// Finds where a person could sit or lie in a 3D point cloud, and how.
@@ -76,12 +76,13 @@ struct EvalArgs {
     /// Body heights, metres.
     #[arg(long, value_delimiter = ',', default_value = "1.75", value_parser = parse_height)]
     heights: Vec<f64>,
-    /// Agent model [default: the built-in agents/human.toml].
-    #[arg(long)]
-    agent: Option<PathBuf>,
-    /// Affordance hierarchy [default: the built-in affordances/sitting.toml].
-    #[arg(long)]
-    affordances: Option<PathBuf>,
+    /// Body model: a TOML file or a built-in name (human, child) [default: human].
+    #[arg(long, value_name = "FILE|NAME")]
+    agent: Option<String>,
+    /// Affordance hierarchies: TOML files, folders or built-in names, comma-separated
+    /// [default: every built-in one].
+    #[arg(long, value_name = "FILE|DIR|NAME", value_delimiter = ',')]
+    affordances: Vec<String>,
     /// Write the scores as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -97,18 +98,30 @@ struct EvalArgs {
 
 #[derive(clap::Args)]
 struct ModelArgs {
-    /// Agent model [default: the built-in agents/human.toml].
-    #[arg(long)]
-    agent: Option<PathBuf>,
-    /// Affordance hierarchy [default: the built-in affordances/sitting.toml].
-    #[arg(long)]
-    affordances: Option<PathBuf>,
-    /// Body height of the agent, metres (0.3 to 3.0).
-    #[arg(long, default_value_t = 1.75, value_parser = parse_height)]
-    height: f64,
+    /// Body model: a TOML file, or a built-in name (human, child); repeat for several
+    /// [default: human].
+    #[arg(long, value_name = "FILE|NAME")]
+    agent: Vec<String>,
+    /// Affordance hierarchies: TOML files, folders of them, or built-in names (sitting,
+    /// lying), comma-separated or repeated [default: every built-in one].
+    #[arg(long, value_name = "FILE|DIR|NAME", value_delimiter = ',')]
+    affordances: Vec<String>,
+    /// Body heights of the agents, metres (0.3 to 3.0), comma-separated [default: 1.75].
+    #[arg(long, value_delimiter = ',', value_parser = parse_height)]
+    height: Vec<f64>,
     /// Voxel edge length of the scene, metres.
     #[arg(long, value_parser = parse_voxel)]
     voxel: Option<f64>,
+}
+
+impl ModelArgs {
+    fn choice(&self) -> ModelChoice {
+        ModelChoice {
+            agents: self.agent.clone(),
+            hierarchies: self.affordances.clone(),
+            heights: self.height.clone(),
+        }
+    }
 }
 
 #[derive(clap::Args)]
@@ -263,9 +276,7 @@ fn main() -> ExitCode {
             }
             let req = DetectRequest {
                 files: a.files,
-                agent: a.models.agent.clone(),
-                affordances: a.models.affordances.clone(),
-                height: a.models.height,
+                models: a.models.choice(),
                 json: a.json,
                 csv: a.csv,
                 summary: a.summary,
@@ -354,9 +365,7 @@ fn main() -> ExitCode {
             let req = InspectRequest {
                 input,
                 file: a.file,
-                agent: a.models.agent.clone(),
-                affordances: a.models.affordances.clone(),
-                height: a.models.height,
+                models: a.models.choice(),
                 png: a.png,
                 config: config(&a.models),
             };

@@ -27,6 +27,14 @@ pub enum ModelError {
         /// What is wrong, with the key.
         what: String,
     },
+    /// A model named on the command line is neither a file, a folder nor a built-in one.
+    #[error("{name}: {what}")]
+    Unknown {
+        /// The name as given.
+        name: String,
+        /// What is wrong.
+        what: String,
+    },
     /// The file parses but describes an impossible model.
     #[error("{path}: {key}: {what}")]
     Invalid {

@@ -701,6 +701,8 @@ mod tests {
 
     fn detection(affordances: &[&str], parts: Vec<Cylinder>) -> Detection {
         Detection {
+            agent: "human".into(),
+            height: 1.75,
             hierarchy: "sitting".into(),
             position: Point3::new(0.0, 0.0, 0.5),
             yaw: 0.0,

@@ -9,23 +9,94 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::detect::{Detection, Outcome};
+use crate::detect::{Detection, Outcome, Stats};
+use crate::model_set::Model;
 
-/// The result of one input file, as it goes into the outputs.
+/// The result of one input file over every model of the run, as it goes into the outputs.
 #[derive(Debug, Clone)]
 pub struct FileReport {
     /// The file as named on the command line (or relative to a labels file).
     pub file: String,
-    /// Body height, metres.
-    pub height: f64,
-    /// Agent name.
-    pub agent: String,
-    /// Affordance ids of the hierarchy, in node order.
-    pub ids: Vec<String>,
-    /// What detection produced.
-    pub outcome: Outcome,
+    /// Points of the cloud.
+    pub points: usize,
     /// Points dropped for non-finite coordinates.
     pub dropped_non_finite: usize,
+    /// Affordance ids of every hierarchy run, each once, in hierarchy and node order.
+    pub ids: Vec<String>,
+    /// What each model (a body with a hierarchy) produced, in the order of the set.
+    pub runs: Vec<RunStats>,
+    /// The detections of every run, run after run; their index here is their number.
+    pub detections: Vec<Detection>,
+    /// Per input point, the number of the first detection whose segment holds it.
+    pub labels: Vec<Option<usize>>,
+}
+
+/// One model's run over a file: which body and hierarchy, and the counts of its stages.
+#[derive(Debug, Clone)]
+pub struct RunStats {
+    /// Agent name.
+    pub agent: String,
+    /// Body height, metres.
+    pub height: f64,
+    /// Hierarchy name.
+    pub hierarchy: String,
+    /// Stage counts.
+    pub stats: Stats,
+}
+
+impl FileReport {
+    /// Gathers the outcomes of `models` (one each, in order) on one file.
+    pub fn new(
+        file: String,
+        points: usize,
+        dropped_non_finite: usize,
+        models: &[Model],
+        outcomes: Vec<Outcome>,
+    ) -> FileReport {
+        let mut detections = Vec::new();
+        let mut labels: Vec<Option<usize>> = vec![None; points];
+        let mut runs = Vec::new();
+        for (m, o) in models.iter().zip(outcomes) {
+            let offset = detections.len();
+            for (l, ol) in labels.iter_mut().zip(&o.labels) {
+                if l.is_none() {
+                    *l = ol.map(|i| i + offset);
+                }
+            }
+            runs.push(RunStats {
+                agent: m.agent.name.clone(),
+                height: m.agent.height,
+                hierarchy: m.hierarchy.name.clone(),
+                stats: o.stats,
+            });
+            detections.extend(o.detections);
+        }
+        FileReport {
+            file,
+            points,
+            dropped_non_finite,
+            ids: crate::model_set::ids(models),
+            runs,
+            detections,
+            labels,
+        }
+    }
+
+    /// The bodies of the run, `(agent, height)`, each once, in order.
+    pub fn bodies(&self) -> Vec<(&str, f64)> {
+        let mut out: Vec<(&str, f64)> = Vec::new();
+        for r in &self.runs {
+            if !out.iter().any(|b| b.0 == r.agent && b.1 == r.height) {
+                out.push((&r.agent, r.height));
+            }
+        }
+        out
+    }
+
+    /// Hypotheses over every run.
+    pub fn hypotheses(&self) -> usize {
+        self.runs.iter().map(|r| r.stats.hypotheses).sum()
+    }
 }
 
 /// Rounds to `d` decimals for output (stable bytes, no float noise).
@@ -43,6 +114,8 @@ fn round(x: f64, d: i32) -> f64 {
 struct JsonDetection<'a> {
     detection: usize,
     hierarchy: &'a str,
+    agent: &'a str,
+    height: f64,
     position: [f64; 3],
     yaw_deg: f64,
     affordances: &'a [String],
@@ -55,36 +128,44 @@ struct JsonDetection<'a> {
 }
 
 #[derive(Serialize)]
-struct JsonFile<'a> {
-    file: &'a str,
+struct JsonRun<'a> {
     agent: &'a str,
     height: f64,
-    points: usize,
-    dropped_non_finite: usize,
+    hierarchy: &'a str,
     hypotheses: usize,
     fits: usize,
+    candidates: usize,
+}
+
+#[derive(Serialize)]
+struct JsonFile<'a> {
+    file: &'a str,
+    points: usize,
+    dropped_non_finite: usize,
     affordances: Vec<&'a str>,
+    runs: Vec<JsonRun<'a>>,
     detections: Vec<JsonDetection<'a>>,
 }
 
 fn json_file(r: &FileReport) -> JsonFile<'_> {
-    let found = affords(r);
     JsonFile {
         file: &r.file,
-        agent: &r.agent,
-        height: round(r.height, 3),
-        points: r.outcome.stats.points,
+        points: r.points,
         dropped_non_finite: r.dropped_non_finite,
-        hypotheses: r.outcome.stats.hypotheses,
-        fits: r.outcome.stats.fits,
-        affordances: r
-            .ids
+        affordances: affords(r, None).into_iter().map(String::as_str).collect(),
+        runs: r
+            .runs
             .iter()
-            .filter(|id| found.contains(id))
-            .map(|s| s.as_str())
+            .map(|u| JsonRun {
+                agent: &u.agent,
+                height: round(u.height, 3),
+                hierarchy: &u.hierarchy,
+                hypotheses: u.stats.hypotheses,
+                fits: u.stats.fits,
+                candidates: u.stats.candidates,
+            })
             .collect(),
         detections: r
-            .outcome
             .detections
             .iter()
             .enumerate()
@@ -98,6 +179,8 @@ fn json_detection(i: usize, d: &Detection) -> JsonDetection<'_> {
     JsonDetection {
         detection: i,
         hierarchy: &d.hierarchy,
+        agent: &d.agent,
+        height: round(d.height, 3),
         position: [
             round(d.position.x, 4),
             round(d.position.y, 4),
@@ -122,20 +205,22 @@ fn json_detection(i: usize, d: &Detection) -> JsonDetection<'_> {
     }
 }
 
-/// The affordance ids a file affords: those of any of its detections.
-pub fn affords(r: &FileReport) -> Vec<&String> {
+/// The affordance ids a file affords: those of any of its detections, or of the
+/// detections of one body `(agent, height)` only.
+pub fn affords<'a>(r: &'a FileReport, body: Option<(&str, f64)>) -> Vec<&'a String> {
     r.ids
         .iter()
         .filter(|id| {
-            r.outcome
-                .detections
-                .iter()
-                .any(|d| d.affordances.contains(id))
+            r.detections.iter().any(|d| {
+                body.is_none_or(|(a, h)| d.agent == a && d.height == h)
+                    && d.affordances.contains(id)
+            })
         })
         .collect()
 }
 
-/// The JSON document of a run: `{"files": [...]}` with one entry per input file.
+/// The JSON document of a run: `{"version": 2, "files": [...]}` with one entry per input
+/// file, each with its runs (body and hierarchy) and its detections (each naming its body).
 pub fn to_json(reports: &[FileReport]) -> String {
     #[derive(Serialize)]
     struct Doc<'a> {
@@ -143,7 +228,7 @@ pub fn to_json(reports: &[FileReport]) -> String {
         files: Vec<JsonFile<'a>>,
     }
     let doc = Doc {
-        version: 1,
+        version: 2,
         files: reports.iter().map(json_file).collect(),
     };
     let mut s = serde_json::to_string_pretty(&doc).unwrap_or_default();
@@ -151,7 +236,8 @@ pub fn to_json(reports: &[FileReport]) -> String {
     s
 }
 
-/// The detections CSV: `file,detection,hierarchy,x,y,z,yaw_deg,score,stability,affordances,segment_points`.
+/// The detections CSV:
+/// `file,detection,hierarchy,x,y,z,yaw_deg,score,stability,affordances,segment_points,agent,height`.
 pub fn to_csv(reports: &[FileReport]) -> Result<String, csv::Error> {
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
@@ -166,9 +252,11 @@ pub fn to_csv(reports: &[FileReport]) -> Result<String, csv::Error> {
         "stability",
         "affordances",
         "segment_points",
+        "agent",
+        "height",
     ])?;
     for r in reports {
-        for (i, d) in r.outcome.detections.iter().enumerate() {
+        for (i, d) in r.detections.iter().enumerate() {
             w.write_record([
                 r.file.clone(),
                 i.to_string(),
@@ -181,13 +269,16 @@ pub fn to_csv(reports: &[FileReport]) -> Result<String, csv::Error> {
                 format!("{:.4}", d.stability),
                 d.affordances.join(";"),
                 d.segment_points.to_string(),
+                d.agent.clone(),
+                format!("{:.3}", d.height),
             ])?;
         }
     }
     Ok(String::from_utf8(w.into_inner().map_err(|e| e.into_error())?).unwrap_or_default())
 }
 
-/// The summary CSV: `file` then one 0/1 column per affordance id (the shape of `labels.csv`).
+/// The summary CSV: `file`, one 0/1 column per affordance id (the shape of `labels.csv`),
+/// then `agent,height`: one row per file and body.
 pub fn to_summary(reports: &[FileReport]) -> Result<String, csv::Error> {
     let mut ids: Vec<&String> = Vec::new();
     for r in reports {
@@ -200,35 +291,45 @@ pub fn to_summary(reports: &[FileReport]) -> Result<String, csv::Error> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let mut header = vec!["file".to_string()];
     header.extend(ids.iter().map(|s| s.to_string()));
+    header.extend(["agent".to_string(), "height".to_string()]);
     w.write_record(&header)?;
     for r in reports {
-        let found = affords(r);
-        let mut row = vec![r.file.clone()];
-        row.extend(
-            ids.iter()
-                .map(|id| if found.contains(id) { "1" } else { "0" }.to_string()),
-        );
-        w.write_record(&row)?;
+        for body in r.bodies() {
+            let found = affords(r, Some(body));
+            let mut row = vec![r.file.clone()];
+            row.extend(
+                ids.iter()
+                    .map(|id| if found.contains(id) { "1" } else { "0" }.to_string()),
+            );
+            row.extend([body.0.to_string(), format!("{:.3}", body.1)]);
+            w.write_record(&row)?;
+        }
     }
     Ok(String::from_utf8(w.into_inner().map_err(|e| e.into_error())?).unwrap_or_default())
 }
 
 /// A short table of the detections for a terminal.
 pub fn to_table(r: &FileReport) -> String {
+    let several = r.bodies().len() > 1;
     let mut s = format!(
         "{}: {} points, {} hypotheses, {} detections; affords: {}\n",
         r.file,
-        r.outcome.stats.points,
-        r.outcome.stats.hypotheses,
-        r.outcome.detections.len(),
-        match affords(r) {
+        r.points,
+        r.hypotheses(),
+        r.detections.len(),
+        match affords(r, None) {
             a if a.is_empty() => "nothing".to_string(),
             a => a.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", "),
         }
     );
-    for (i, d) in r.outcome.detections.iter().enumerate() {
+    for (i, d) in r.detections.iter().enumerate() {
+        let body = if several {
+            format!("  [{} {:.2} m]", d.agent, d.height)
+        } else {
+            String::new()
+        };
         s.push_str(&format!(
-            "  #{i:<3} x {:>7.3}  y {:>7.3}  z {:>6.3}  yaw {:>6.1}  score {:.3}  stability {:.3}  {}\n",
+            "  #{i:<3} x {:>7.3}  y {:>7.3}  z {:>6.3}  yaw {:>6.1}  score {:.3}  stability {:.3}  {}{body}\n",
             d.position.x,
             d.position.y,
             d.position.z,

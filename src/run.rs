@@ -6,23 +6,50 @@ use std::path::{Path, PathBuf};
 
 use crate::agent::Agent;
 use crate::cloud;
-use crate::detect::{detect, DetectConfig};
+use crate::detect::{detect_all, DetectConfig};
 use crate::hierarchy::Hierarchy;
 use crate::input::{load_input, Input, InputOptions};
 use crate::model::ModelError;
+use crate::model_set::{load_set, sources, Model, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
 use crate::report::{self, FileReport};
+
+/// Which models a command runs: bodies (agents at heights) and hierarchies, each named by
+/// file, folder or built-in name (see [`crate::model_set::sources`]).
+#[derive(Debug, Clone, Default)]
+pub struct ModelChoice {
+    /// Agents; empty for the built-in `human`.
+    pub agents: Vec<String>,
+    /// Hierarchies; empty for every built-in one (`sitting`, `lying`).
+    pub hierarchies: Vec<String>,
+    /// Body heights, metres; empty for 1.75 m.
+    pub heights: Vec<f64>,
+}
+
+/// The body height used when none is given, metres (an average adult).
+pub const DEFAULT_HEIGHT: f64 = 1.75;
+
+impl ModelChoice {
+    /// Resolves the names and loads every body with every hierarchy.
+    pub fn load(&self) -> Result<Vec<Model>, ModelError> {
+        let agents = sources(&self.agents, BUILTIN_AGENTS, &["human"])?;
+        let names: Vec<&str> = BUILTIN_HIERARCHIES.iter().map(|(n, _)| *n).collect();
+        let hierarchies = sources(&self.hierarchies, BUILTIN_HIERARCHIES, &names)?;
+        let heights = if self.heights.is_empty() {
+            vec![DEFAULT_HEIGHT]
+        } else {
+            self.heights.clone()
+        };
+        load_set(&agents, &hierarchies, &heights)
+    }
+}
 
 /// Everything `afford detect` was asked to do, validated.
 #[derive(Debug, Clone)]
 pub struct DetectRequest {
     /// Input clouds.
     pub files: Vec<PathBuf>,
-    /// Agent model file; `None` for the built-in `agents/human.toml`.
-    pub agent: Option<PathBuf>,
-    /// Hierarchy file; `None` for the built-in `affordances/sitting.toml`.
-    pub affordances: Option<PathBuf>,
-    /// Body height, metres.
-    pub height: f64,
+    /// Bodies and hierarchies.
+    pub models: ModelChoice,
     /// JSON output.
     pub json: Option<PathBuf>,
     /// Detections CSV output.
@@ -41,7 +68,7 @@ pub struct DetectRequest {
     pub quiet: bool,
 }
 
-/// Loads the agent scaled to `height` and the hierarchy resolved against it.
+/// Loads the agent file scaled to `height` and the hierarchy file resolved against it.
 pub fn load_models(
     agent: &Path,
     affordances: &Path,
@@ -53,40 +80,16 @@ pub fn load_models(
 }
 
 /// The agent model compiled into the binary (`agents/human.toml`).
-pub const BUILTIN_AGENT: &str = include_str!("../agents/human.toml");
+pub const BUILTIN_AGENT: &str = BUILTIN_AGENTS[0].1;
 /// The sitting hierarchy compiled into the binary (`affordances/sitting.toml`).
-pub const BUILTIN_SITTING: &str = include_str!("../affordances/sitting.toml");
+pub const BUILTIN_SITTING: &str = BUILTIN_HIERARCHIES[0].1;
+/// The lying hierarchy compiled into the binary (`affordances/lying.toml`).
+pub const BUILTIN_LYING: &str = BUILTIN_HIERARCHIES[1].1;
 
-/// Like [`load_models`], with the built-in models where no file is given.
-pub fn load_models_or_builtin(
-    agent: Option<&Path>,
-    affordances: Option<&Path>,
-    height: f64,
-) -> Result<(Agent, Hierarchy), ModelError> {
-    let a = match agent {
-        Some(p) => Agent::load(p, height)?,
-        None => Agent::from_toml(
-            BUILTIN_AGENT,
-            Path::new("(built-in) agents/human.toml"),
-            height,
-        )?,
-    };
-    let h = match affordances {
-        Some(p) => Hierarchy::load(p, &a)?,
-        None => Hierarchy::from_toml(
-            BUILTIN_SITTING,
-            Path::new("(built-in) affordances/sitting.toml"),
-            &a,
-        )?,
-    };
-    Ok((a, h))
-}
-
-/// Detects in one file (already in metres, z up, floor at z = 0).
+/// Detects in one file (already in metres, z up, floor at z = 0) with every model.
 pub fn detect_file(
     path: &Path,
-    agent: &Agent,
-    h: &Hierarchy,
+    models: &[Model],
     cfg: &DetectConfig,
 ) -> Result<FileReport, cloud::CloudError> {
     let loaded = cloud::load(path)?;
@@ -94,8 +97,7 @@ pub fn detect_file(
         path,
         &loaded.cloud,
         loaded.dropped_non_finite,
-        agent,
-        h,
+        models,
         cfg,
     ))
 }
@@ -104,18 +106,16 @@ fn report_of(
     path: &Path,
     cloud: &cloud::PointCloud,
     dropped: usize,
-    agent: &Agent,
-    h: &Hierarchy,
+    models: &[Model],
     cfg: &DetectConfig,
 ) -> FileReport {
-    FileReport {
-        file: path.display().to_string(),
-        height: agent.height,
-        agent: agent.name.clone(),
-        ids: h.ids().into_iter().map(String::from).collect(),
-        outcome: detect(cloud, agent, h, cfg),
-        dropped_non_finite: dropped,
-    }
+    FileReport::new(
+        path.display().to_string(),
+        cloud.len(),
+        dropped,
+        models,
+        detect_all(cloud, models, cfg),
+    )
 }
 
 /// Where a per-input output of `input` goes: `base` itself for a single input, otherwise
@@ -138,11 +138,7 @@ pub fn per_input_path(base: &Path, input: &Path, several: bool) -> PathBuf {
 /// Runs `afford detect`; returns the process exit code (0 all files done, 2 any failure).
 /// Results go to `out` (the table, when no output file is asked for), diagnostics to `err`.
 pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
-    let (agent, h) = match load_models_or_builtin(
-        req.agent.as_deref(),
-        req.affordances.as_deref(),
-        req.height,
-    ) {
+    let models = match req.models.load() {
         Ok(m) => m,
         Err(e) => {
             let _ = writeln!(err, "error: {e}");
@@ -173,8 +169,7 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
                     path,
                     &input.cloud,
                     input.dropped_non_finite,
-                    &agent,
-                    &h,
+                    &models,
                     &req.config,
                 );
                 if let Some(base) = &req.segments {
@@ -186,9 +181,7 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
                 }
                 if let Some(base) = &req.mesh {
                     let target = per_input_path(base, path, several);
-                    if let Err(e) =
-                        crate::agent_mesh::agent_mesh_ply(&r.outcome.detections, &target)
-                    {
+                    if let Err(e) = crate::agent_mesh::agent_mesh_ply(&r.detections, &target) {
                         let _ = bar.suspend(|| {
                             writeln!(err, "error: {}: cannot write: {e}", target.display())
                         });
@@ -237,7 +230,6 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
 /// Writes the input cloud (world frame) with the per-point detection index (-1 for none).
 fn write_segments(input: &Input, target: &Path, r: &FileReport) -> Result<(), cloud::CloudError> {
     let labels: Vec<f64> = r
-        .outcome
         .labels
         .iter()
         .map(|l| l.map_or(-1.0, |i| i as f64))
@@ -268,12 +260,8 @@ fn notes(input: &Input, path: &Path, err: &mut dyn Write) {
 pub struct InspectRequest {
     /// The input cloud.
     pub file: PathBuf,
-    /// Agent model file; `None` for the built-in one.
-    pub agent: Option<PathBuf>,
-    /// Hierarchy file; `None` for the built-in sitting hierarchy.
-    pub affordances: Option<PathBuf>,
-    /// Body height, metres.
-    pub height: f64,
+    /// Bodies and hierarchies; the arrows are the hypotheses of the first model.
+    pub models: ModelChoice,
     /// The picture to write.
     pub png: PathBuf,
     /// How the input is read and brought into the world frame.
@@ -282,15 +270,11 @@ pub struct InspectRequest {
     pub config: DetectConfig,
 }
 
-/// Runs `afford inspect`: detection on one file and a picture of the height map with its
-/// hypotheses and detections (the paper's Fig. 4 b-d) beside views of the posed agents.
-/// Returns the exit code (0 done, 2 error).
+/// Runs `afford inspect`: detection on one file and a picture of the height map with the
+/// hypotheses of the first model and the detections of all (the paper's Fig. 4 b-d) beside
+/// views of the posed agents. Returns the exit code (0 done, 2 error).
 pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
-    let (agent, h) = match load_models_or_builtin(
-        req.agent.as_deref(),
-        req.affordances.as_deref(),
-        req.height,
-    ) {
+    let models = match req.models.load() {
         Ok(m) => m,
         Err(e) => {
             let _ = writeln!(err, "error: {e}");
@@ -306,22 +290,46 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
     };
     notes(&loaded, &req.file, err);
     let prepared = crate::detect::prepare(&loaded.cloud, &req.config);
-    let hyps =
-        crate::hypotheses::hypotheses(&prepared.map, &h.hypothesis, h.orientation, agent.height);
-    let outcome = crate::detect::detect_prepared(&loaded.cloud, &prepared, &agent, &h, &req.config);
-    if let Err(e) = crate::render::inspect_png(&loaded.cloud, &prepared, &hyps, &outcome, &req.png)
-    {
+    let hyps = models
+        .first()
+        .map(|m| {
+            crate::hypotheses::hypotheses(
+                &prepared.map,
+                &m.hierarchy.hypothesis,
+                m.hierarchy.orientation,
+                m.agent.height,
+            )
+        })
+        .unwrap_or_default();
+    let outcomes: Vec<crate::detect::Outcome> = models
+        .iter()
+        .map(|m| {
+            crate::detect::detect_prepared(
+                &loaded.cloud,
+                &prepared,
+                &m.agent,
+                &m.hierarchy,
+                &req.config,
+            )
+        })
+        .collect();
+    let stats = outcomes.first().map(|o| o.stats).unwrap_or_default();
+    let r = FileReport::new(
+        req.file.display().to_string(),
+        loaded.cloud.len(),
+        loaded.dropped_non_finite,
+        &models,
+        outcomes,
+    );
+    let drawn = crate::detect::Outcome {
+        detections: r.detections.clone(),
+        labels: r.labels.clone(),
+        stats,
+    };
+    if let Err(e) = crate::render::inspect_png(&loaded.cloud, &prepared, &hyps, &drawn, &req.png) {
         let _ = writeln!(err, "error: {}: cannot write: {e}", req.png.display());
         return 2;
     }
-    let r = FileReport {
-        file: req.file.display().to_string(),
-        height: agent.height,
-        agent: agent.name.clone(),
-        ids: h.ids().into_iter().map(String::from).collect(),
-        outcome,
-        dropped_non_finite: loaded.dropped_non_finite,
-    };
     let _ = out.write_all(report::to_table(&r).as_bytes());
     let _ = writeln!(
         out,
@@ -428,10 +436,10 @@ pub struct EvalRequest {
     pub labels: PathBuf,
     /// Body heights, metres.
     pub heights: Vec<f64>,
-    /// Agent model file; `None` for the built-in one.
-    pub agent: Option<PathBuf>,
-    /// Hierarchy file; `None` for the built-in one.
-    pub affordances: Option<PathBuf>,
+    /// Agent (file or built-in name); `None` for the built-in `human`.
+    pub agent: Option<String>,
+    /// Hierarchies (files, folders or built-in names); empty for every built-in one.
+    pub affordances: Vec<String>,
     /// JSON output.
     pub json: Option<PathBuf>,
     /// CSV output.
@@ -445,11 +453,28 @@ pub struct EvalRequest {
 /// Runs `afford eval`: prints the markdown table; returns the exit code (2 on error or
 /// when a file could not be read).
 pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    let sources = (|| {
+        let agents = sources(
+            &req.agent.iter().cloned().collect::<Vec<_>>(),
+            BUILTIN_AGENTS,
+            &["human"],
+        )?;
+        let names: Vec<&str> = BUILTIN_HIERARCHIES.iter().map(|(n, _)| *n).collect();
+        let hierarchies = sources(&req.affordances, BUILTIN_HIERARCHIES, &names)?;
+        Ok::<_, ModelError>((agents, hierarchies))
+    })();
+    let (agents, hierarchies) = match sources {
+        Ok(s) => s,
+        Err(e) => {
+            let _ = writeln!(err, "error: {e}");
+            return 2;
+        }
+    };
     let ev = match crate::eval::evaluate(
         &req.labels,
         &req.heights,
-        req.agent.as_deref(),
-        req.affordances.as_deref(),
+        &agents[0],
+        &hierarchies,
         &req.input,
         !req.quiet,
     ) {

@@ -229,6 +229,25 @@ impl Scene {
         (grad.norm() > 1e-9).then(|| grad.normalize())
     }
 
+    /// How far (metres) the scene lies straight below `p`: the drop to the first occupied
+    /// voxel or the floor, or `f64::INFINITY` when there is nothing below within `max`.
+    pub fn drop_below(&self, p: &Point3<f64>, max: f64) -> f64 {
+        let floor = if self.floor { p.z } else { f64::INFINITY };
+        let mut q = *p;
+        // March down by the clearance bound (never less than half a voxel).
+        while p.z - q.z <= max.min(floor) {
+            if self.point_clearance(&q) <= self.voxel / 2.0 {
+                return p.z - q.z;
+            }
+            q.z -= self.point_clearance(&q).max(self.voxel / 2.0);
+        }
+        if floor <= max {
+            floor
+        } else {
+            f64::INFINITY
+        }
+    }
+
     /// Distance (metres, >= 0) from the surface of a body part of radius `radius` whose axis
     /// passes through `p` to the nearest voxel or the floor: the d_i of Eq. 1.
     pub fn surface_distance(&self, p: &Point3<f64>, radius: f64) -> f64 {

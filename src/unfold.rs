@@ -186,6 +186,7 @@ fn unfold_node(
         }
         let mut local = 1.0;
         let mut found = false;
+        let mut all_found = true;
         for (branch, links) in branches.iter().zip(&branch_links) {
             // The spread joints that move only this branch's links; each of their angles is tried.
             let spreads: Vec<&crate::hierarchy::Spread> = node
@@ -223,8 +224,12 @@ fn unfold_node(
                     node_posture.angles[sp.joint] = trial.angles[sp.joint];
                 }
                 found |= hit.is_some();
+                all_found &= hit.is_some();
                 local = t_norm(local, r);
             }
+        }
+        if node.contact == crate::hierarchy::ContactRule::All {
+            found &= all_found;
         }
         let better = match &outcome {
             None => true,
@@ -311,6 +316,11 @@ fn sweep_branch(
             blocked = hit.take();
         }
     }
+    if let Some(t) = hit {
+        if !supported(agent, scene, place, &p, node, branch, t) {
+            blocked = hit.take();
+        }
+    }
     let mut sq = 0.0;
     for &s in branch {
         let sw = &node.sweeps[s];
@@ -327,6 +337,55 @@ fn sweep_branch(
         hit,
         local_score(hit.map(|_| sq), h.score.sigma_theta, h.score.epsilon),
     )
+}
+
+/// Whether the branch's support parts (if the node has any that the branch moves) rest on
+/// the scene at sweep parameter `t`: some part has the scene within `support_gap` below it.
+fn supported(
+    agent: &Agent,
+    scene: &Scene,
+    place: &Placement,
+    posture: &Posture,
+    node: &Node,
+    branch: &[usize],
+    t: f64,
+) -> bool {
+    let mine: Vec<(usize, [f64; 2])> = node
+        .support
+        .iter()
+        .copied()
+        .filter(|(l, _)| {
+            branch
+                .iter()
+                .any(|&s| agent.is_descendant(*l, node.sweeps[s].joint))
+        })
+        .collect();
+    if mine.is_empty() {
+        return true;
+    }
+    let mut p = posture.clone();
+    for &s in branch {
+        let sw = &node.sweeps[s];
+        p.angles[sw.joint] = sw.theta1 + t * (sw.theta2 - sw.theta1);
+    }
+    let mut frames = Vec::new();
+    agent.forward_kinematics(place, &p, &mut frames);
+    let step = scene.voxel_size();
+    agent
+        .cylinders(&frames, |j| mine.iter().any(|(l, _)| *l == j))
+        .iter()
+        .any(|c| {
+            let [s0, s1] = mine
+                .iter()
+                .find(|(l, _)| *l == c.joint)
+                .map_or([0.0, 1.0], |m| m.1);
+            let d = c.b - c.a;
+            let n = ((d.norm() * (s1 - s0)) / step).ceil().max(1.0) as usize;
+            (0..=n).any(|i| {
+                let q = c.a + d * (s0 + (s1 - s0) * i as f64 / n as f64);
+                scene.drop_below(&q, c.radius + node.support_gap) - c.radius <= node.support_gap
+            })
+        })
 }
 
 /// Groups a node's sweeps (by index) into kinematic branches: sweeps that move a common

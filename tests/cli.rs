@@ -68,18 +68,24 @@ fn outputs_follow_the_interfaces_and_do_not_depend_on_threads() {
     let csv = std::fs::read_to_string(d.path().join("one.csv")).unwrap();
     assert_eq!(
         csv.lines().next().unwrap(),
-        "file,detection,hierarchy,x,y,z,yaw_deg,score,stability,affordances,segment_points"
+        "file,detection,hierarchy,x,y,z,yaw_deg,score,stability,affordances,segment_points,agent,height"
     );
     assert_eq!(csv.lines().count(), 4);
     assert!(csv.contains("sitting;armrest;backrest"), "{csv}");
     let summary = std::fs::read_to_string(d.path().join("one-summary.csv")).unwrap();
     assert_eq!(
         summary,
-        format!("file,sitting,armrest,backrest,headrest\n{SAMPLE},1,1,1,0\n")
+        format!(
+            "file,sitting,armrest,backrest,headrest,lying,elongated_body,raised_body,\
+             stretched_legs,raised_legs,agent,height\n{SAMPLE},1,1,1,0,0,0,0,0,0,human,1.750\n"
+        )
     );
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(d.path().join("one.json")).unwrap()).unwrap();
+    assert_eq!(json["version"], 2);
     let det = &json["files"][0]["detections"][0];
+    assert_eq!(det["agent"], "human");
+    assert_eq!(det["height"], 1.75);
     assert!(det["pose_deg"]["knee_l"].as_f64().unwrap() > 50.0);
     assert!(det["segment_points"].as_u64().unwrap() > 500);
     // No temporary files are left behind.

@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use afford::eval::evaluate;
+use afford::model_set::{Source, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
 
 /// `(height in mm, affordance) -> F` of the main (non-doubtful) rows of an eval CSV.
 fn baseline(path: &Path) -> BTreeMap<(u32, String), f64> {
@@ -37,11 +38,16 @@ fn no_f_score_drops_below_the_baseline() {
         "baseline covers 3 heights x 4 affordances: {base:?}"
     );
     let heights = [1.65, 1.75, 1.85];
+    let agent = Source::Builtin("human", BUILTIN_AGENTS[0].1);
+    let hierarchies: Vec<Source> = BUILTIN_HIERARCHIES
+        .iter()
+        .map(|(n, t)| Source::Builtin(n, t))
+        .collect();
     let ev = evaluate(
         Path::new("data/regression/labels.csv"),
         &heights,
-        None,
-        None,
+        &agent,
+        &hierarchies,
         &Default::default(),
         false,
     )

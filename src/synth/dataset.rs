@@ -12,8 +12,10 @@
 //! * `armrest`: arms 0.12–0.35 m above the seat, on the seat's sides;
 //! * `headrest`: a back reaching at least 0.70 m above the seat, or (kind `wall`) the wall
 //!   0-0.15 m behind the seat;
-//! * `lying`: a flat surface at least 1.9 m long and 0.6 m wide (beds, long wide benches,
-//!   long deep sofas).
+//! * `lying`: a surface that carries an adult (1.75 m) on the back from head to heels: a
+//!   flat one at least [`LYING_MIN_LENGTH`] long and [`LYING_MIN_WIDTH`] wide (beds, long
+//!   benches), or a sofa at least [`LYING_MIN_SOFA_LENGTH`] long between its arms (the head
+//!   on one arm, the ankles on the other).
 //!
 //! Per-point `part` codes: 0 other (legs, frames, floor, walls), 1 seat, 2 backrest,
 //! 3 armrest, 4 headrest, 5 lying surface.
@@ -590,7 +592,7 @@ pub fn make_object(class: Class, rng: &mut ChaCha8Rng) -> Object {
                 backrest: p.back_height_above_seat >= 0.25,
                 armrest: (0.12..=0.35).contains(&p.arm_height_above_seat),
                 headrest: p.back_height_above_seat >= 0.70,
-                lying: len >= 1.9 && p.seat_depth >= 0.6,
+                lying: len >= LYING_MIN_SOFA_LENGTH && p.seat_depth >= LYING_MIN_WIDTH,
             };
             let mut m = sofa(&p);
             if labels.lying {
@@ -623,7 +625,7 @@ pub fn make_object(class: Class, rng: &mut ChaCha8Rng) -> Object {
             let labels = Labels {
                 sitting: true,
                 backrest: back,
-                lying: p.length >= 1.9 && p.seat_depth >= 0.6,
+                lying: p.length >= LYING_MIN_LENGTH && p.seat_depth >= LYING_MIN_WIDTH,
                 ..Labels::default()
             };
             let mut m = bench(&p);
@@ -961,6 +963,17 @@ struct Scene {
     class: String,
     doubtful: Option<String>,
 }
+
+/// Shortest flat surface labelled `lying`, metres: it must carry the 1.75 m adult from the
+/// back of the head to the ankles (about 0.85 H = 1.5 m); the feet may overhang.
+pub const LYING_MIN_LENGTH: f64 = 1.6;
+/// Narrowest surface labelled `lying`, metres: the width of the back that rests on it
+/// (the shoulders, 0.45 m, may overhang a little).
+pub const LYING_MIN_WIDTH: f64 = 0.40;
+/// Shortest sofa seat (between the arms) labelled `lying`, metres: two seats; the head
+/// rests on one arm and the ankles on the other (a 1.0 m seat and two arms span the
+/// ~1.5 m from the back of the head to the ankles). A one-seat armchair does not.
+pub const LYING_MIN_SOFA_LENGTH: f64 = 1.0;
 
 /// Least visible area of a seat or lying surface (m^2) for its labels to count in a view:
 /// about a 0.22 m square, under which the torso template (0.30 m across at 1.75 m)
@@ -1456,7 +1469,10 @@ mod tests {
                 let lying_area = o.mesh.part_area(Part::LyingSurface);
                 assert_eq!(o.labels.lying, lying_area > 0.0, "{class:?} {seed}");
                 if o.labels.lying {
-                    assert!(lying_area >= 1.9 * 0.6 * 0.95, "{lying_area}");
+                    assert!(
+                        lying_area >= LYING_MIN_SOFA_LENGTH * LYING_MIN_WIDTH * 0.95,
+                        "{lying_area}"
+                    );
                 }
             }
         }
