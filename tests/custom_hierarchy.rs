@@ -187,3 +187,29 @@ fn a_broken_custom_hierarchy_is_refused_with_file_line_and_key() {
         "{e}"
     );
 }
+
+#[test]
+fn the_examples_of_docs_models_md_load() {
+    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/models.md"))
+        .unwrap();
+    let agent =
+        Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap();
+    let blocks: Vec<&str> = doc
+        .split("```toml\n")
+        .skip(1)
+        .map(|b| b.split("```").next().unwrap_or(""))
+        .collect();
+    let mut kinds = Vec::new();
+    for block in blocks {
+        let at = Path::new("docs/models.md");
+        if block.contains("[[joint]]") {
+            Agent::from_toml(block, at, 1.75).unwrap_or_else(|e| panic!("{e}"));
+            kinds.push("agent");
+        } else {
+            let h = Hierarchy::from_toml(block, at, &agent).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(h.ids(), ["perching", "backrest"]);
+            kinds.push("hierarchy");
+        }
+    }
+    assert_eq!(kinds, ["agent", "hierarchy"]);
+}
