@@ -5,13 +5,13 @@
 //! z up; every joint angle is 0 in the upright standing pose. Lengths in the model file
 //! are fractions of body height H; [`Agent::load`] scales them to metres.
 
-use std::collections::HashMap;
+use std::collections::HashSet;
 use std::path::Path;
 
 use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use serde::Deserialize;
 
-use crate::model::{invalid, read_toml, ModelError};
+use crate::model::{parse_toml, read_text, tree_order, Key, ModelError, Source, TreeWords};
 
 /// One joint (a vertex of H) with its optional body part (the edge to its parent's frame).
 #[derive(Debug, Clone, PartialEq)]
@@ -124,91 +124,49 @@ struct LinkFile {
 impl Agent {
     /// Loads an agent file and scales it to body height `height` (metres).
     pub fn load(path: &Path, height: f64) -> Result<Agent, ModelError> {
-        let file: AgentFile = read_toml(path)?;
-        Self::from_file(file, path, height)
+        Self::from_toml(&read_text(path)?, path, height)
     }
 
     /// Parses agent TOML text (`path` only names the source in errors).
     pub fn from_toml(text: &str, path: &Path, height: f64) -> Result<Agent, ModelError> {
-        let file: AgentFile = crate::model::parse_toml(text, path)?;
-        Self::from_file(file, path, height)
+        let file: AgentFile = parse_toml(text, path)?;
+        Self::from_file(file, Source { path, text }, height)
     }
 
-    fn from_file(file: AgentFile, path: &Path, height: f64) -> Result<Agent, ModelError> {
+    fn from_file(file: AgentFile, src: Source, height: f64) -> Result<Agent, ModelError> {
         if !(height.is_finite() && height > 0.3 && height < 3.0) {
-            return Err(invalid(
-                path,
+            return Err(src.invalid_outside(
                 "height",
                 format!("body height {height} m is outside 0.3-3.0 m"),
             ));
         }
-        // Topological order: repeatedly take joints whose parent is already placed.
-        let mut index: HashMap<String, usize> = HashMap::new();
-        let mut joints: Vec<Joint> = Vec::with_capacity(file.joint.len());
-        let mut pending: Vec<&JointFile> = file.joint.iter().collect();
-        let mut names = std::collections::HashSet::new();
-        let mut link_names = std::collections::HashSet::new();
-        for j in &file.joint {
-            if !names.insert(j.name.as_str()) {
-                return Err(invalid(
-                    path,
-                    format!("joint.{}", j.name),
-                    "duplicate joint name",
-                ));
-            }
-            if let Some(p) = &j.parent {
-                if !file.joint.iter().any(|k| &k.name == p) {
-                    return Err(invalid(
-                        path,
-                        format!("joint.{}.parent", j.name),
-                        format!("unknown parent joint `{p}`"),
-                    ));
-                }
-            }
+        let key = |i: usize| Key::top("joint").item(i, &file.joint[i].name);
+        let order = tree_order(
+            src,
+            &TreeWords {
+                item: "joint",
+                name_key: "name",
+            },
+            file.joint.len(),
+            key,
+            |i| &file.joint[i].name,
+            |i| file.joint[i].parent.as_deref(),
+        )?;
+        let mut link_names = HashSet::new();
+        for (i, j) in file.joint.iter().enumerate() {
             if let Some(l) = &j.link {
                 if !link_names.insert(l.name.as_str()) {
-                    return Err(invalid(
-                        path,
-                        format!("joint.{}.link.name", j.name),
-                        "duplicate link name",
+                    return Err(src.invalid(
+                        &key(i).key("link").key("name"),
+                        format!("duplicate link name `{}`", l.name),
                     ));
                 }
             }
         }
-        if file.joint.iter().filter(|j| j.parent.is_none()).count() != 1 {
-            return Err(invalid(
-                path,
-                "joint",
-                "exactly one joint must have no parent (the root)",
-            ));
-        }
-        while !pending.is_empty() {
-            let before = pending.len();
-            let mut rest = Vec::new();
-            for j in pending {
-                let parent = match &j.parent {
-                    None => None,
-                    Some(p) => match index.get(p) {
-                        Some(&i) => Some(i),
-                        None => {
-                            rest.push(j);
-                            continue;
-                        }
-                    },
-                };
-                let joint = Self::joint(j, parent, path, height)?;
-                index.insert(j.name.clone(), joints.len());
-                joints.push(joint);
-            }
-            if rest.len() == before {
-                return Err(invalid(
-                    path,
-                    format!("joint.{}.parent", rest[0].name),
-                    "the joints form a cycle",
-                ));
-            }
-            pending = rest;
-        }
+        let joints = order
+            .into_iter()
+            .map(|(i, parent)| Self::joint(&file.joint[i], key(i), parent, src, height))
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(Agent {
             name: file.name,
             height,
@@ -218,37 +176,51 @@ impl Agent {
 
     fn joint(
         j: &JointFile,
+        key: Key,
         parent: Option<usize>,
-        path: &Path,
+        src: Source,
         h: f64,
     ) -> Result<Joint, ModelError> {
-        let key = |k: &str| format!("joint.{}.{k}", j.name);
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         if !finite(&j.origin) {
-            return Err(invalid(path, key("origin"), "not finite"));
+            return Err(src.invalid(&key.key("origin"), "must be finite"));
         }
         let axis = Vector3::from(j.axis);
         if !finite(&j.axis) || axis.norm() < 1e-9 {
-            return Err(invalid(path, key("axis"), "must be a non-zero vector"));
+            return Err(src.invalid(&key.key("axis"), "must be a non-zero vector"));
         }
         if !(j.limit.lower.is_finite() && j.limit.upper.is_finite())
             || j.limit.lower > j.limit.upper
         {
-            return Err(invalid(path, key("limit"), "lower must not exceed upper"));
+            return Err(src.invalid(
+                &key.key("limit"),
+                format!(
+                    "lower = {} must not exceed upper = {}",
+                    j.limit.lower, j.limit.upper
+                ),
+            ));
         }
         let link = match &j.link {
             None => None,
             Some(l) => {
+                let lk = key.key("link");
+                for (name, v) in [("from", &l.from), ("to", &l.to)] {
+                    if !finite(v) {
+                        return Err(src.invalid(&lk.key(name), "must be finite"));
+                    }
+                }
                 let (from, to) = (Point3::from(l.from) * h, Point3::from(l.to) * h);
-                if !finite(&l.from) || !finite(&l.to) || (to - from).norm() < 1e-6 {
-                    return Err(invalid(
-                        path,
-                        key("link"),
-                        format!("link `{}` has zero length", l.name),
+                if (to - from).norm() < 1e-6 {
+                    return Err(src.invalid(
+                        &lk.key("to"),
+                        format!("link `{}` has zero length (from == to)", l.name),
                     ));
                 }
                 if !(l.radius.is_finite() && l.radius > 0.0) {
-                    return Err(invalid(path, key("link.radius"), "must be positive"));
+                    return Err(src.invalid(
+                        &lk.key("radius"),
+                        format!("must be positive, not {}", l.radius),
+                    ));
                 }
                 Some(Link {
                     name: l.name.clone(),
@@ -367,6 +339,7 @@ impl Agent {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::line_of;
 
     const TWO_LINKS: &str = r#"
 name = "leg"
@@ -442,36 +415,143 @@ link = { name = "shank", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius 
         assert!((a.reach(1) - 0.28).abs() < 1e-9);
     }
 
-    #[test]
-    fn rejects_unknown_parent_cycle_and_zero_links() {
-        let bad = TWO_LINKS.replace("parent = \"hip\"", "parent = \"hips\"");
-        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75)
+    /// The error loading `text` as `x.toml`.
+    fn error(text: &str) -> String {
+        Agent::from_toml(text, Path::new("x.toml"), 1.75)
             .unwrap_err()
-            .to_string();
-        assert!(e.contains("joint.knee.parent") && e.contains("hips"), "{e}");
+            .to_string()
+    }
+
+    /// Asserts that `e` starts with `x.toml:LINE: KEY: ` and mentions `what`.
+    fn names(e: &str, line: usize, key: &str, what: &str) {
+        assert!(
+            e.starts_with(&format!("x.toml:{line}: {key}: ")) && e.contains(what),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn an_unknown_parent_is_named() {
+        let bad = TWO_LINKS.replace("parent = \"hip\"", "parent = \"hips\"");
+        let line = line_of(&bad, "parent = \"hips\"", 0);
+        names(
+            &error(&bad),
+            line,
+            "joint.knee.parent",
+            "depends on a missing joint `hips`",
+        );
+    }
+
+    #[test]
+    fn a_cycle_of_joints_is_named() {
+        let bad = format!(
+            "{TWO_LINKS}{}",
+            r#"
+[[joint]]
+name = "toe"
+parent = "heel"
+origin = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+limit = { lower = 0.0, upper = 10.0 }
+[[joint]]
+name = "heel"
+parent = "toe"
+origin = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+limit = { lower = 0.0, upper = 10.0 }
+"#
+        );
+        let line = line_of(&bad, "parent = \"heel\"", 0);
+        names(&error(&bad), line, "joint.toe.parent", "cycle");
+        assert!(error(&bad).contains("toe -> heel -> toe"));
+    }
+
+    #[test]
+    fn a_zero_length_link_is_named() {
         let bad = TWO_LINKS.replace(
             "to = [0.0, 0.0, -0.25], radius = 0.03",
             "to = [0.0, 0.0, 0.0], radius = 0.03",
         );
-        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75)
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("zero length"), "{e}");
-        let bad = TWO_LINKS.replace(
-            "name = \"hip\"\norigin",
-            "name = \"hip\"\nparent = \"knee\"\norigin",
+        let line = line_of(&bad, "name = \"shank\"", 0);
+        names(
+            &error(&bad),
+            line,
+            "joint.knee.link.to",
+            "`shank` has zero length",
         );
-        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75)
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("root") || e.contains("cycle"), "{e}");
+    }
+
+    #[test]
+    fn a_non_positive_radius_is_named() {
+        for radius in ["0.0", "-0.03", "nan"] {
+            let bad = TWO_LINKS.replace("radius = 0.03", &format!("radius = {radius}"));
+            let line = line_of(&bad, "name = \"shank\"", 0);
+            names(
+                &error(&bad),
+                line,
+                "joint.knee.link.radius",
+                "must be positive",
+            );
+        }
+    }
+
+    #[test]
+    fn duplicate_names_are_named_where_repeated() {
+        let bad = TWO_LINKS.replace("name = \"knee\"", "name = \"hip\"");
+        let line = line_of(&bad, "name = \"hip\"", 1);
+        names(
+            &error(&bad),
+            line,
+            "joint.hip.name",
+            "duplicate joint name `hip`",
+        );
+        let bad = TWO_LINKS.replace("name = \"shank\"", "name = \"thigh\"");
+        let line = line_of(&bad, "name = \"thigh\"", 1);
+        names(
+            &error(&bad),
+            line,
+            "joint.knee.link.name",
+            "duplicate link name `thigh`",
+        );
+    }
+
+    #[test]
+    fn a_second_root_is_named() {
+        let bad = TWO_LINKS.replace("parent = \"hip\"\n", "");
+        let line = line_of(&bad, "name = \"knee\"", 0);
+        names(&error(&bad), line, "joint.knee.name", "root (`hip`)");
+    }
+
+    #[test]
+    fn impossible_axes_and_limits_are_named() {
+        let bad = TWO_LINKS.replace("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 0.0, 0.0]");
+        let line = line_of(&bad, "axis = [0.0, 0.0, 0.0]", 0);
+        names(&error(&bad), line, "joint.knee.axis", "non-zero");
+        let bad = TWO_LINKS.replace("lower = 0.0, upper = 150.0", "lower = 150.0, upper = 0.0");
+        let line = line_of(&bad, "lower = 150.0", 0);
+        names(&error(&bad), line, "joint.knee.limit", "must not exceed");
+    }
+
+    #[test]
+    fn an_unknown_key_is_named_with_its_line() {
         let bad = TWO_LINKS.replace(
             "axis = [0.0, 1.0, 0.0]",
             "axis = [0.0, 1.0, 0.0]\ncolour = 3",
         );
-        let e = Agent::from_toml(&bad, Path::new("x.toml"), 1.75)
+        let line = line_of(&bad, "colour", 0);
+        names(
+            &error(&bad),
+            line,
+            "joint.knee.colour",
+            "unknown field `colour`",
+        );
+    }
+
+    #[test]
+    fn a_height_out_of_range_names_no_line() {
+        let e = Agent::from_toml(TWO_LINKS, Path::new("x.toml"), 17.5)
             .unwrap_err()
             .to_string();
-        assert!(e.contains("x.toml:") && e.contains("colour"), "{e}");
+        assert_eq!(e, "x.toml: height: body height 17.5 m is outside 0.3-3.0 m");
     }
 }

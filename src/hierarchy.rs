@@ -5,7 +5,7 @@
 //!
 //! Angles in the file are degrees; lengths are metres unless the key says "fraction of H".
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use nalgebra::{Unit, Vector3};
@@ -13,7 +13,7 @@ use serde::Deserialize;
 
 use crate::agent::{Agent, Posture};
 use crate::fuzzy::{Availability, Low, Trapezoid};
-use crate::model::{invalid, parse_toml, read_toml, ModelError};
+use crate::model::{parse_toml, read_text, tree_order, Key, ModelError, Source, TreeWords};
 
 /// How the agent's heading relates to the height-gradient descent (section 4.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -314,271 +314,54 @@ struct SweepFile {
 impl Hierarchy {
     /// Loads a hierarchy file and resolves its joint and link names against `agent`.
     pub fn load(path: &Path, agent: &Agent) -> Result<Hierarchy, ModelError> {
-        let file: File = read_toml(path)?;
-        Self::resolve(file, path, agent)
+        Self::from_toml(&read_text(path)?, path, agent)
     }
 
     /// Parses hierarchy TOML text (`path` only names the source in errors).
     pub fn from_toml(text: &str, path: &Path, agent: &Agent) -> Result<Hierarchy, ModelError> {
         let file: File = parse_toml(text, path)?;
-        Self::resolve(file, path, agent)
+        Self::resolve(file, Source { path, text }, agent)
     }
 
-    fn resolve(file: File, path: &Path, agent: &Agent) -> Result<Hierarchy, ModelError> {
-        let link = |key: String, name: &str| {
-            agent.link_index(name).ok_or_else(|| {
-                invalid(
-                    path,
-                    key,
-                    format!("unknown link `{name}` (not in agent `{}`)", agent.name),
-                )
-            })
-        };
-        let joint = |key: String, name: &str| {
-            agent.joint_index(name).ok_or_else(|| {
-                invalid(
-                    path,
-                    key,
-                    format!("unknown joint `{name}` (not in agent `{}`)", agent.name),
-                )
-            })
-        };
-        let h = &file.hypothesis;
-        for (key, v) in [
-            ("hypothesis.template_diameter", h.template_diameter),
-            ("hypothesis.gradient_radius", h.gradient_radius),
-            ("suppression_radius", file.suppression_radius),
-            ("fit.sigma_d", file.fit.sigma_d),
-            ("fit.sample_spacing", file.fit.sample_spacing),
-            ("fit.fallback_yaw_step", file.fit.fallback_yaw_step),
-            ("score.sigma_theta", file.score.sigma_theta),
-            ("score.epsilon", file.score.epsilon),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(invalid(path, key, "must be positive"));
-            }
-        }
+    fn resolve(file: File, src: Source, agent: &Agent) -> Result<Hierarchy, ModelError> {
+        check_numbers(&file, src)?;
+        let names = Names { src, agent };
         let mut initial = agent.rest_posture();
         for (name, deg) in &file.initial_pose {
-            let j = joint(format!("initial_pose.{name}"), name)?;
+            let key = Key::top("initial_pose").key(name);
+            let j = names.joint(&key, name)?;
+            if !deg.is_finite() {
+                return Err(src.invalid(&key, "must be a finite angle"));
+            }
             initial.angles[j] = deg.to_radians();
         }
-        let stability_links = file
-            .fit
-            .stability_links
-            .iter()
-            .map(|n| link("fit.stability_links".into(), n))
-            .collect::<Result<Vec<_>, _>>()?;
-        let unchecked_links = file
-            .fit
-            .unchecked_links
-            .iter()
-            .map(|n| link("fit.unchecked_links".into(), n))
-            .collect::<Result<Vec<_>, _>>()?;
-        // Nodes: resolve parents, then order parents before children.
-        let ids: HashMap<&str, usize> = file
-            .node
-            .iter()
-            .enumerate()
-            .map(|(i, n)| (n.id.as_str(), i))
-            .collect();
-        if ids.len() != file.node.len() {
-            return Err(invalid(path, "node.id", "duplicate node id"));
-        }
-        let roots: Vec<&NodeFile> = file.node.iter().filter(|n| n.parent.is_none()).collect();
-        if roots.len() != 1 {
-            return Err(invalid(
-                path,
-                "node",
-                "exactly one node must have no parent (the root)",
+        let fit = Key::top("fit");
+        let stability_links =
+            names.links(&fit.key("stability_links"), &file.fit.stability_links)?;
+        if stability_links.is_empty() {
+            return Err(src.invalid(
+                &fit.key("stability_links"),
+                "needs at least one link (what rests on the seat)",
             ));
         }
-        for n in &file.node {
-            if let Some(p) = &n.parent {
-                if !ids.contains_key(p.as_str()) {
-                    return Err(invalid(
-                        path,
-                        format!("node.{}.parent", n.id),
-                        format!("depends on a missing node `{p}`"),
-                    ));
-                }
-            }
-        }
-        let mut order: Vec<usize> = Vec::new();
-        let mut placed = vec![false; file.node.len()];
-        loop {
-            let before = order.len();
-            for (i, n) in file.node.iter().enumerate() {
-                let ready = n.parent.as_ref().is_none_or(|p| placed[ids[p.as_str()]]);
-                if !placed[i] && ready {
-                    placed[i] = true;
-                    order.push(i);
-                }
-            }
-            if order.len() == file.node.len() {
-                break;
-            }
-            if order.len() == before {
-                let stuck = placed.iter().position(|p| !p).unwrap_or(0);
-                return Err(invalid(
-                    path,
-                    format!("node.{}.parent", file.node[stuck].id),
-                    "the nodes form a cycle",
-                ));
-            }
-        }
-        let new_index: HashMap<usize, usize> = order
-            .iter()
-            .enumerate()
-            .map(|(new, &old)| (old, new))
-            .collect();
-        let mut nodes = Vec::with_capacity(order.len());
-        for &i in &order {
-            let n = &file.node[i];
-            let key = |k: &str| format!("node.{}.{k}", n.id);
-            let spanned = |field: &str, refs: &[LinkRef]| {
-                let mut out = Vec::new();
-                for l in refs {
-                    let (name, span) = match l {
-                        LinkRef::Name(name) => (name, [0.0, 1.0]),
-                        LinkRef::Span { link, span } => (link, *span),
-                    };
-                    if !(0.0..=1.0).contains(&span[0])
-                        || !(0.0..=1.0).contains(&span[1])
-                        || span[0] >= span[1]
-                    {
-                        return Err(invalid(
-                            path,
-                            key(&format!("{field}.{name}.span")),
-                            "needs 0 <= from < to <= 1",
-                        ));
-                    }
-                    out.push((link(key(field), name)?, span));
-                }
-                Ok(out)
-            };
-            let (links, spans): (Vec<usize>, Vec<[f64; 2]>) =
-                spanned("links", &n.links)?.into_iter().unzip();
-            let support = spanned("support", &n.support)?;
-            if !(n.support_gap.is_finite() && n.support_gap >= 0.0) {
-                return Err(invalid(
-                    path,
-                    key("support_gap"),
-                    "must be 0 or more metres",
-                ));
-            }
-            if links.is_empty() {
-                return Err(invalid(
-                    path,
-                    key("links"),
-                    "a node needs at least one link to check",
-                ));
-            }
-            let mut sweeps = Vec::new();
-            for s in &n.sweep {
-                let j = joint(key("sweep.joint"), &s.joint)?;
-                if !(s.theta1.is_finite() && s.theta2.is_finite() && s.thetad.is_finite()) {
-                    return Err(invalid(path, key("sweep"), "angles must be finite"));
-                }
-                if s.theta1 > s.theta2 {
-                    return Err(invalid(
-                        path,
-                        key(&format!("sweep.{}.theta1", s.joint)),
-                        format!("theta1 = {} exceeds theta2 = {}", s.theta1, s.theta2),
-                    ));
-                }
-                let axis = match s.axis {
-                    None => agent.joints[j].axis,
-                    Some(a) => {
-                        let v = Vector3::from(a);
-                        if v.norm().is_nan() || v.norm() <= 1e-9 {
-                            return Err(invalid(
-                                path,
-                                key(&format!("sweep.{}.axis", s.joint)),
-                                "must be a non-zero vector",
-                            ));
-                        }
-                        Unit::new_normalize(v)
-                    }
-                };
-                sweeps.push(Sweep {
-                    joint: j,
-                    theta1: s.theta1.to_radians(),
-                    theta2: s.theta2.to_radians(),
-                    thetad: s.thetad.to_radians(),
-                    axis,
-                });
-            }
-            if sweeps.is_empty() {
-                return Err(invalid(
-                    path,
-                    key("sweep"),
-                    "a node needs at least one joint sweep",
-                ));
-            }
-            let mut spreads = Vec::new();
-            for sp in &n.spread {
-                let j = joint(key("spread.joint"), &sp.joint)?;
-                if sp.angles.is_empty() || sp.angles.iter().any(|a| !a.is_finite()) {
-                    return Err(invalid(
-                        path,
-                        key(&format!("spread.{}.angles", sp.joint)),
-                        "needs finite angles",
-                    ));
-                }
-                if sweeps.iter().any(|s| s.joint == j) {
-                    return Err(invalid(
-                        path,
-                        key(&format!("spread.{}", sp.joint)),
-                        "a joint cannot be both swept and spread",
-                    ));
-                }
-                spreads.push(Spread {
-                    joint: j,
-                    angles: sp.angles.iter().map(|a| a.to_radians()).collect(),
-                });
-            }
-            let mut clamps = Vec::new();
-            for c in &n.clamp {
-                let j = joint(key("clamp.joint"), &c.joint)?;
-                if !(c.lower.is_finite() && c.upper.is_finite()) || c.lower > c.upper {
-                    return Err(invalid(
-                        path,
-                        key(&format!("clamp.{}", c.joint)),
-                        "lower must not exceed upper",
-                    ));
-                }
-                clamps.push(Clamp {
-                    joint: j,
-                    lower: c.lower.to_radians(),
-                    upper: c.upper.to_radians(),
-                });
-            }
-            nodes.push(Node {
-                id: n.id.clone(),
-                parent: n.parent.as_ref().map(|p| new_index[&ids[p.as_str()]]),
-                when: n.when,
-                links,
-                spans,
-                sweeps,
-                spreads,
-                clamps,
-                release: match n.release.map(Vector3::from) {
-                    Some(r) if r.norm().is_nan() || r.norm() <= 1e-9 => {
-                        return Err(invalid(
-                            path,
-                            key("release"),
-                            "must be a non-zero direction",
-                        ))
-                    }
-                    r => r,
-                },
-                free_start: n.free_start,
-                contact: n.contact,
-                support,
-                support_gap: n.support_gap,
-            });
-        }
+        let unchecked_links =
+            names.links(&fit.key("unchecked_links"), &file.fit.unchecked_links)?;
+        let key = |i: usize| Key::top("node").item(i, &file.node[i].id);
+        let order = tree_order(
+            src,
+            &TreeWords {
+                item: "node",
+                name_key: "id",
+            },
+            file.node.len(),
+            key,
+            |i| &file.node[i].id,
+            |i| file.node[i].parent.as_deref(),
+        )?;
+        let nodes = order
+            .into_iter()
+            .map(|(i, parent)| resolve_node(&file.node[i], &key(i), parent, &names))
+            .collect::<Result<Vec<_>, _>>()?;
         let f = &file.fit;
         Ok(Hierarchy {
             name: file.name,
@@ -615,9 +398,320 @@ impl Hierarchy {
     }
 }
 
+/// What a number of the hierarchy file must be.
+#[derive(Debug, Clone, Copy)]
+enum Bound {
+    /// Finite and above 0.
+    Positive,
+    /// Finite and at least 0.
+    NonNegative,
+    /// Between 0 and 1, both included.
+    Fraction,
+}
+
+impl Bound {
+    fn holds(self, v: f64) -> bool {
+        match self {
+            Bound::Positive => v.is_finite() && v > 0.0,
+            Bound::NonNegative => v.is_finite() && v >= 0.0,
+            Bound::Fraction => (0.0..=1.0).contains(&v),
+        }
+    }
+
+    fn what(self, v: f64) -> String {
+        match self {
+            Bound::Positive => format!("must be positive, not {v}"),
+            Bound::NonNegative => format!("must not be negative, not {v}"),
+            Bound::Fraction => format!("must be between 0 and 1, not {v}"),
+        }
+    }
+}
+
+/// Checks the numbers of the hypothesis, fit and score sections.
+fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
+    let (hyp, fit, score) = (Key::top("hypothesis"), Key::top("fit"), Key::top("score"));
+    let (h, f, s) = (&file.hypothesis, &file.fit, &file.score);
+    use Bound::*;
+    for (key, v, bound) in [
+        (hyp.key("template_diameter"), h.template_diameter, Positive),
+        (hyp.key("gradient_radius"), h.gradient_radius, Positive),
+        (hyp.key("flat_gradient"), h.flat_gradient, NonNegative),
+        (
+            Key::top("suppression_radius"),
+            file.suppression_radius,
+            Positive,
+        ),
+        (fit.key("fallback_yaw_step"), f.fallback_yaw_step, Positive),
+        (fit.key("start_clearance"), f.start_clearance, NonNegative),
+        (fit.key("max_drop"), f.max_drop, NonNegative),
+        (fit.key("sigma_d"), f.sigma_d, Positive),
+        (fit.key("min_stability"), f.min_stability, Fraction),
+        (fit.key("stability_band"), f.stability_band, NonNegative),
+        (fit.key("sample_spacing"), f.sample_spacing, Positive),
+        (score.key("sigma_theta"), s.sigma_theta, Positive),
+        (score.key("epsilon"), s.epsilon, Positive),
+        (score.key("epsilon"), s.epsilon, Fraction),
+        (score.key("min_local"), s.min_local, Fraction),
+    ] {
+        if !bound.holds(v) {
+            return Err(src.invalid(&key, bound.what(v)));
+        }
+    }
+    if !(0.0..=180.0).contains(&s.support_angle) {
+        return Err(src.invalid(
+            &score.key("support_angle"),
+            format!("must be 0-180 degrees, not {}", s.support_angle),
+        ));
+    }
+    if let Some(k) = f.yaw_offsets.iter().position(|y| !y.is_finite()) {
+        return Err(src.invalid(&fit.key("yaw_offsets").at(k), "must be finite"));
+    }
+    // Fuzzy sets: their breakpoints in order.
+    let mut sets = vec![
+        (
+            hyp.key("discontinuity"),
+            vec![h.discontinuity.full, h.discontinuity.zero],
+        ),
+        (
+            hyp.key("roughness"),
+            vec![h.roughness.full, h.roughness.zero],
+        ),
+        (hyp.key("available"), h.available.rise.to_vec()),
+    ];
+    if let Some(t) = h.height {
+        sets.push((hyp.key("height"), vec![t.a, t.b, t.c, t.d]));
+    }
+    for (key, points) in sets {
+        if points.iter().any(|v| !v.is_finite()) || points.windows(2).any(|w| w[0] > w[1]) {
+            return Err(src.invalid(
+                &key,
+                format!("needs finite values in increasing order, not {points:?}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Resolves joint and link names of a hierarchy file against the agent.
+struct Names<'a> {
+    src: Source<'a>,
+    agent: &'a Agent,
+}
+
+impl Names<'_> {
+    fn joint(&self, key: &Key, name: &str) -> Result<usize, ModelError> {
+        self.agent.joint_index(name).ok_or_else(|| {
+            self.src.invalid(
+                key,
+                format!(
+                    "unknown joint `{name}` (not in agent `{}`)",
+                    self.agent.name
+                ),
+            )
+        })
+    }
+
+    fn link(&self, key: &Key, name: &str) -> Result<usize, ModelError> {
+        self.agent.link_index(name).ok_or_else(|| {
+            self.src.invalid(
+                key,
+                format!("unknown link `{name}` (not in agent `{}`)", self.agent.name),
+            )
+        })
+    }
+
+    /// The links named by the array at `key`, each named once.
+    fn links(&self, key: &Key, names: &[String]) -> Result<Vec<usize>, ModelError> {
+        let mut out = Vec::with_capacity(names.len());
+        for (k, name) in names.iter().enumerate() {
+            let l = self.link(&key.at(k), name)?;
+            if out.contains(&l) {
+                return Err(self
+                    .src
+                    .invalid(&key.at(k), format!("link `{name}` is listed twice")));
+            }
+            out.push(l);
+        }
+        Ok(out)
+    }
+}
+
+/// Resolves one node (`key` locates it in the file; `parent` is its parent's index in
+/// the ordered nodes).
+fn resolve_node(
+    n: &NodeFile,
+    key: &Key,
+    parent: Option<usize>,
+    names: &Names,
+) -> Result<Node, ModelError> {
+    let (src, agent) = (names.src, names.agent);
+    let (links, spans): (Vec<usize>, Vec<[f64; 2]>) =
+        spanned_links(&n.links, &key.key("links"), names)?
+            .into_iter()
+            .unzip();
+    let support = spanned_links(&n.support, &key.key("support"), names)?;
+    if !(n.support_gap.is_finite() && n.support_gap >= 0.0) {
+        return Err(src.invalid(&key.key("support_gap"), "must be 0 or more metres"));
+    }
+    if links.is_empty() {
+        return Err(src.invalid(&key.key("links"), "a node needs at least one link to check"));
+    }
+    let mut sweeps: Vec<Sweep> = Vec::new();
+    for (k, s) in n.sweep.iter().enumerate() {
+        let sk = key.key("sweep").item(k, &s.joint);
+        let j = names.joint(&sk.key("joint"), &s.joint)?;
+        for (name, v) in [
+            ("theta1", s.theta1),
+            ("theta2", s.theta2),
+            ("thetad", s.thetad),
+        ] {
+            if !v.is_finite() {
+                return Err(src.invalid(&sk.key(name), "must be a finite angle"));
+            }
+        }
+        if s.theta1 > s.theta2 {
+            return Err(src.invalid(
+                &sk.key("theta1"),
+                format!(
+                    "theta1 = {} exceeds theta2 = {} (a sweep turns from theta1 up to theta2)",
+                    s.theta1, s.theta2
+                ),
+            ));
+        }
+        if sweeps.iter().any(|o| o.joint == j) {
+            return Err(src.invalid(
+                &sk.key("joint"),
+                format!("joint `{}` is swept twice", s.joint),
+            ));
+        }
+        if !links.iter().any(|&l| agent.is_descendant(l, j)) {
+            return Err(src.invalid(
+                &sk.key("joint"),
+                format!(
+                    "joint `{}` moves none of the node's links, so its sweep can touch nothing",
+                    s.joint
+                ),
+            ));
+        }
+        let axis = match s.axis {
+            None => agent.joints[j].axis,
+            Some(a) => {
+                let v = Vector3::from(a);
+                if !v.norm().is_finite() || v.norm() <= 1e-9 {
+                    return Err(src.invalid(&sk.key("axis"), "must be a non-zero vector"));
+                }
+                Unit::new_normalize(v)
+            }
+        };
+        sweeps.push(Sweep {
+            joint: j,
+            theta1: s.theta1.to_radians(),
+            theta2: s.theta2.to_radians(),
+            thetad: s.thetad.to_radians(),
+            axis,
+        });
+    }
+    if sweeps.is_empty() {
+        return Err(src.invalid(&key.key("sweep"), "a node needs at least one joint sweep"));
+    }
+    let mut spreads: Vec<Spread> = Vec::new();
+    for (k, sp) in n.spread.iter().enumerate() {
+        let sk = key.key("spread").item(k, &sp.joint);
+        let j = names.joint(&sk.key("joint"), &sp.joint)?;
+        if sp.angles.is_empty() || sp.angles.iter().any(|a| !a.is_finite()) {
+            return Err(src.invalid(&sk.key("angles"), "needs finite angles"));
+        }
+        if sweeps.iter().any(|s| s.joint == j) {
+            return Err(src.invalid(
+                &sk.key("joint"),
+                format!("joint `{}` cannot be both swept and spread", sp.joint),
+            ));
+        }
+        if spreads.iter().any(|o| o.joint == j) {
+            return Err(src.invalid(
+                &sk.key("joint"),
+                format!("joint `{}` is spread twice", sp.joint),
+            ));
+        }
+        spreads.push(Spread {
+            joint: j,
+            angles: sp.angles.iter().map(|a| a.to_radians()).collect(),
+        });
+    }
+    let mut clamps = Vec::new();
+    for (k, c) in n.clamp.iter().enumerate() {
+        let ck = key.key("clamp").item(k, &c.joint);
+        let j = names.joint(&ck.key("joint"), &c.joint)?;
+        if !(c.lower.is_finite() && c.upper.is_finite()) || c.lower > c.upper {
+            return Err(src.invalid(
+                &ck.key("lower"),
+                format!("lower = {} must not exceed upper = {}", c.lower, c.upper),
+            ));
+        }
+        clamps.push(Clamp {
+            joint: j,
+            lower: c.lower.to_radians(),
+            upper: c.upper.to_radians(),
+        });
+    }
+    let release = match n.release.map(Vector3::from) {
+        Some(r) if !r.norm().is_finite() || r.norm() <= 1e-9 => {
+            return Err(src.invalid(&key.key("release"), "must be a non-zero direction"))
+        }
+        r => r,
+    };
+    Ok(Node {
+        id: n.id.clone(),
+        parent,
+        when: n.when,
+        links,
+        spans,
+        sweeps,
+        spreads,
+        clamps,
+        release,
+        free_start: n.free_start,
+        contact: n.contact,
+        support,
+        support_gap: n.support_gap,
+    })
+}
+
+/// Resolves a list of links, each with the span of it that counts, checking each once.
+fn spanned_links(
+    refs: &[LinkRef],
+    key: &Key,
+    names: &Names,
+) -> Result<Vec<(usize, [f64; 2])>, ModelError> {
+    let mut out: Vec<(usize, [f64; 2])> = Vec::new();
+    for (k, l) in refs.iter().enumerate() {
+        let at = key.at(k);
+        let (name, span) = match l {
+            LinkRef::Name(name) => (name, [0.0, 1.0]),
+            LinkRef::Span { link, span } => (link, *span),
+        };
+        let index = names.link(&at, name)?;
+        if !(0.0..=1.0).contains(&span[0]) || !(0.0..=1.0).contains(&span[1]) || span[0] >= span[1]
+        {
+            return Err(names.src.invalid(
+                &key.item(k, name).key("span"),
+                format!("needs 0 <= from < to <= 1, not {span:?}"),
+            ));
+        }
+        if out.iter().any(|(i, _)| *i == index) {
+            return Err(names
+                .src
+                .invalid(&at, format!("link `{name}` is listed twice")));
+        }
+        out.push((index, span));
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::line_of;
     use crate::run::{BUILTIN_AGENT, BUILTIN_SITTING};
 
     fn agent() -> Agent {
@@ -650,29 +744,115 @@ mod tests {
         );
     }
 
+    /// The error loading `text` as `h.toml`.
+    fn error(text: &str) -> String {
+        load(text).unwrap_err().to_string()
+    }
+
+    /// The error of the built-in hierarchy with `from` replaced by `to` (once, checked),
+    /// and the line where `to` now stands.
+    fn edited(from: &str, to: &str) -> (String, usize) {
+        assert_eq!(
+            BUILTIN_SITTING.matches(from).count(),
+            1,
+            "`{from}` is not unique"
+        );
+        let bad = BUILTIN_SITTING.replace(from, to);
+        let line = line_of(&bad, to.lines().last().unwrap_or(to), 0);
+        (error(&bad), line)
+    }
+
+    /// Asserts that `e` starts with `h.toml:LINE: KEY: ` and mentions `what`.
+    fn names(e: &str, line: usize, key: &str, what: &str) {
+        assert!(
+            e.starts_with(&format!("h.toml:{line}: {key}: ")) && e.contains(what),
+            "{e}"
+        );
+    }
+
     #[test]
-    fn bad_hierarchies_name_the_key() {
-        let swapped =
-            BUILTIN_SITTING.replace("theta1 = 0.0, theta2 = 30.0", "theta1 = 30.0, theta2 = 0.0");
-        let e = load(&swapped).unwrap_err().to_string();
-        assert!(
-            e.contains("node.headrest.sweep.neck.theta1") && e.contains("exceeds"),
-            "{e}"
+    fn a_sweep_from_above_its_end_is_named() {
+        let (e, line) = edited("theta1 = 0.0, theta2 = 30.0", "theta1 = 30.0, theta2 = 0.0");
+        names(
+            &e,
+            line,
+            "node.headrest.sweep.neck.theta1",
+            "exceeds theta2",
         );
-        let orphan = BUILTIN_SITTING.replace("parent = \"backrest\"", "parent = \"back\"");
-        let e = load(&orphan).unwrap_err().to_string();
-        assert!(
-            e.contains("node.headrest.parent") && e.contains("missing node `back`"),
-            "{e}"
+    }
+
+    #[test]
+    fn a_missing_parent_node_is_named() {
+        let (e, line) = edited("parent = \"backrest\"", "parent = \"back\"");
+        names(&e, line, "node.headrest.parent", "missing node `back`");
+    }
+
+    #[test]
+    fn a_cycle_of_nodes_is_named() {
+        let (e, line) = edited(
+            "id = \"backrest\"\nparent = \"sitting\"",
+            "id = \"backrest\"\nparent = \"headrest\"",
         );
-        let unknown = BUILTIN_SITTING.replace("links = [\"torso\"]", "links = [\"trunk\"]");
-        let e = load(&unknown).unwrap_err().to_string();
-        assert!(
-            e.contains("node.backrest.links") && e.contains("unknown link `trunk`"),
-            "{e}"
+        names(&e, line, "node.backrest.parent", "cycle");
+        assert!(e.contains("backrest -> headrest -> backrest"), "{e}");
+    }
+
+    #[test]
+    fn a_duplicate_node_id_is_named_where_repeated() {
+        let bad = BUILTIN_SITTING.replace("id = \"armrest\"", "id = \"backrest\"");
+        names(
+            &error(&bad),
+            line_of(&bad, "id = \"backrest\"", 1),
+            "node.backrest.id",
+            "duplicate node id",
         );
-        let typo = BUILTIN_SITTING.replace("free_start = true", "free_starts = true");
-        let e = load(&typo).unwrap_err().to_string();
-        assert!(e.starts_with("h.toml:") && e.contains("free_starts"), "{e}");
+    }
+
+    #[test]
+    fn an_initial_pose_of_an_unknown_joint_is_named() {
+        let (e, line) = edited("knee_r = 90.0", "kne_r = 90.0");
+        names(&e, line, "initial_pose.kne_r", "unknown joint `kne_r`");
+    }
+
+    #[test]
+    fn an_unknown_link_is_named() {
+        let (e, line) = edited("links = [\"torso\"]", "links = [\"trunk\"]");
+        names(&e, line, "node.backrest.links", "unknown link `trunk`");
+        let (e, line) = edited(
+            "stability_links = [\"pelvis\"]",
+            "stability_links = [\"hips\"]",
+        );
+        names(&e, line, "fit.stability_links", "unknown link `hips`");
+    }
+
+    #[test]
+    fn a_sweep_that_moves_no_checked_link_is_named() {
+        let (e, line) = edited(
+            "sweep = [{ joint = \"lumbar\", theta1",
+            "sweep = [{ joint = \"neck\", theta1",
+        );
+        names(&e, line, "node.backrest.sweep.neck.joint", "moves none");
+    }
+
+    #[test]
+    fn a_number_out_of_range_is_named() {
+        let (e, line) = edited("sigma_d = 0.03", "sigma_d = -0.03");
+        names(&e, line, "fit.sigma_d", "must be positive");
+        let (e, line) = edited(
+            "height = [0.14, 0.21, 0.28, 0.33]",
+            "height = [0.14, 0.28, 0.21, 0.33]",
+        );
+        names(&e, line, "hypothesis.height", "increasing order");
+    }
+
+    #[test]
+    fn an_unknown_key_is_named_with_its_line() {
+        let (e, line) = edited("free_start = true", "free_starts = true");
+        names(
+            &e,
+            line,
+            "node.sitting.free_starts",
+            "unknown field `free_starts`",
+        );
     }
 }
