@@ -51,14 +51,25 @@ const SEAT_RADIUS: f64 = 0.10;
 /// Length of the heading arrow of a detection, metres.
 const HEADING_LENGTH: f64 = 0.30;
 
-/// The colour of the finest affordance in `affordances` (ids of one detection): the one
-/// latest in [`AFFORDANCE_LEGEND`] (headrest over armrest over backrest over sitting);
-/// [`OTHER_AFFORDANCE`] if none is in the legend.
-pub fn affordance_colour(affordances: &[String]) -> [u8; 3] {
+/// The finest affordance in `affordances` (ids of one detection, in hierarchy order): the
+/// one latest in [`AFFORDANCE_LEGEND`] (headrest over armrest over backrest over sitting),
+/// else the last one; `None` for none.
+pub fn finest_affordance(affordances: &[String]) -> Option<&str> {
     AFFORDANCE_LEGEND
         .iter()
         .rev()
-        .find(|(id, _)| affordances.iter().any(|a| a == id))
+        .find_map(|(id, _)| affordances.iter().find(|a| a == id))
+        .or(affordances.last())
+        .map(String::as_str)
+}
+
+/// The colour of the finest affordance in `affordances` ([`finest_affordance`]) from
+/// [`AFFORDANCE_LEGEND`]; [`OTHER_AFFORDANCE`] if it is not in the legend.
+pub fn affordance_colour(affordances: &[String]) -> [u8; 3] {
+    let finest = finest_affordance(affordances);
+    AFFORDANCE_LEGEND
+        .iter()
+        .find(|(id, _)| Some(*id) == finest)
         .map_or(OTHER_AFFORDANCE, |(_, c)| *c)
 }
 
@@ -803,6 +814,14 @@ mod tests {
             AFFORDANCE_LEGEND[2].1
         );
         assert_eq!(affordance_colour(&strs(&["lying"])), OTHER_AFFORDANCE);
+        assert_eq!(affordance_colour(&[]), OTHER_AFFORDANCE);
+        let finest = |a: &[&str]| finest_affordance(&strs(a)).map(String::from);
+        assert_eq!(
+            finest(&["sitting", "armrest", "backrest"]).unwrap(),
+            "armrest"
+        );
+        assert_eq!(finest(&["lying", "pillow"]).unwrap(), "pillow");
+        assert_eq!(finest(&[]), None);
         let m = HeightMap {
             x0: -0.5,
             y0: -0.5,
