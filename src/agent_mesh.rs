@@ -1,13 +1,15 @@
-//! The posed agents of detections as a triangle mesh (binary PLY), to look at them together
-//! with the cloud in MeshLab or CloudCompare.
+//! The posed agents of detections as a triangle mesh (binary PLY), and the cloud with its
+//! segments (binary PLY, coloured the same way), to look at them together in MeshLab or
+//! CloudCompare.
 
 use std::path::Path;
 
 use nalgebra::{Point3, Vector3};
 
 use crate::agent::Cylinder;
+use crate::cloud::{CloudError, Scalar};
 use crate::detect::Detection;
-use crate::render::affordance_colour;
+use crate::render::{affordance_colour, finest_affordance};
 
 /// Segments around the circumference of every body part in [`agent_mesh_ply`].
 pub const SEGMENTS: usize = 16;
@@ -110,6 +112,67 @@ pub fn agent_mesh_bytes(detections: &[Detection]) -> Vec<u8> {
 /// to a temporary file in the same directory and renamed into place.
 pub fn agent_mesh_ply(detections: &[Detection], path: &Path) -> std::io::Result<()> {
     crate::report::write_atomic(path, &agent_mesh_bytes(detections))
+}
+
+/// Colour of the points in no detection's segment in [`segments_ply`].
+pub const UNLABELLED: [u8; 3] = [128, 128, 128];
+
+/// The `affordance` code of a detection in [`segments_ply`]: 1 + the index in `ids` (the
+/// hierarchy's affordance ids, in node order) of its finest affordance
+/// ([`finest_affordance`], the one its colour shows); 0 for none.
+pub fn affordance_code(d: &Detection, ids: &[String]) -> usize {
+    finest_affordance(&d.affordances)
+        .and_then(|f| ids.iter().position(|id| id == f))
+        .map_or(0, |i| i + 1)
+}
+
+/// Writes `points` (the cloud the detections were found in, in its order; `labels` gives
+/// each point's detection) as a binary
+/// little-endian PLY with, per vertex, `x, y, z` float (metres), `detection` int (index of
+/// the detection whose segment holds the point, -1 for none), `affordance` int
+/// ([`affordance_code`] of that detection, 0 for none) and `red, green, blue` uchar (the
+/// detection's colour in the mesh of [`agent_mesh_ply`] and the pictures, [`UNLABELLED`]
+/// grey for none). The header lists the codes: `comment affordance 0 none`,
+/// `comment affordance 1 sitting`, ... Written atomically, like every output.
+pub fn segments_ply(
+    points: &[Point3<f64>],
+    detections: &[Detection],
+    labels: &[Option<usize>],
+    ids: &[String],
+    path: &Path,
+) -> Result<(), CloudError> {
+    let per_detection: Vec<(f64, [u8; 3])> = detections
+        .iter()
+        .map(|d| {
+            (
+                affordance_code(d, ids) as f64,
+                affordance_colour(&d.affordances),
+            )
+        })
+        .collect();
+    let mut cols: [Vec<f64>; 5] = Default::default();
+    for label in labels {
+        let (det, (code, rgb)) = label
+            .and_then(|i| Some((i as f64, *per_detection.get(i)?)))
+            .unwrap_or((-1.0, (0.0, UNLABELLED)));
+        let row = [det, code, rgb[0].into(), rgb[1].into(), rgb[2].into()];
+        for (col, v) in cols.iter_mut().zip(row) {
+            col.push(v);
+        }
+    }
+    let names = ["detection", "affordance", "red", "green", "blue"];
+    let types = [Scalar::I32, Scalar::I32, Scalar::U8, Scalar::U8, Scalar::U8];
+    let extra: Vec<_> = (0..5)
+        .map(|k| (names[k], types[k], cols[k].as_slice()))
+        .collect();
+    let comments: Vec<String> = std::iter::once("affordance 0 none".to_string())
+        .chain(
+            ids.iter()
+                .enumerate()
+                .map(|(i, id)| format!("affordance {} {id}", i + 1)),
+        )
+        .collect();
+    crate::cloud::write_ply_typed(path, points, &extra, &comments, true)
 }
 
 #[cfg(test)]
@@ -215,6 +278,98 @@ mod tests {
                 assert!(i >= 0 && (i as usize) < nv);
             }
         }
+    }
+
+    #[test]
+    fn segments_open_in_both_readers_with_codes_and_palette_colours() {
+        use crate::detect::Outcome;
+        use ply_rs_bw::ply::{DefaultElement, Property, PropertyType, ScalarType};
+        let ids: Vec<String> = ["sitting", "armrest", "backrest", "headrest"]
+            .map(String::from)
+            .to_vec();
+        let outcome = Outcome {
+            detections: vec![
+                detection(&["sitting", "armrest", "backrest"], vec![]),
+                detection(&["sitting", "backrest", "headrest"], vec![]),
+                detection(&["sitting"], vec![]),
+            ],
+            labels: vec![Some(1), None, Some(0), Some(2), Some(7)],
+            stats: Default::default(),
+        };
+        let points: Vec<_> = (0..5).map(|i| Point3::new(i as f64, 0.5, -0.25)).collect();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("seg.ply");
+        segments_ply(&points, &outcome.detections, &outcome.labels, &ids, &path).unwrap();
+
+        // Our own reader: the points, and every field by name.
+        let got = crate::cloud::read_ply(&path).unwrap();
+        assert_eq!(got, points);
+        let field = |n| crate::cloud::read_ply_property(&path, n).unwrap().unwrap();
+        assert_eq!(field("detection"), [1.0, -1.0, 0.0, 2.0, -1.0]);
+        // headrest 4, armrest 2 (the colour's affordance), sitting 1; none 0.
+        assert_eq!(field("affordance"), [4.0, 0.0, 2.0, 1.0, 0.0]);
+
+        // ply-rs-bw: names, types, the code table and the colours.
+        let mut f = std::fs::File::open(&path).unwrap();
+        let ply = ply_rs_bw::parser::Parser::<DefaultElement>::new()
+            .read_ply(&mut f)
+            .unwrap();
+        let props = &ply.header.elements["vertex"].properties;
+        let types: Vec<_> = props
+            .values()
+            .map(|p| (p.name.as_str(), p.data_type.clone()))
+            .collect();
+        let s = |t| PropertyType::Scalar(t);
+        assert_eq!(
+            types,
+            [
+                ("x", s(ScalarType::Float)),
+                ("y", s(ScalarType::Float)),
+                ("z", s(ScalarType::Float)),
+                ("detection", s(ScalarType::Int)),
+                ("affordance", s(ScalarType::Int)),
+                ("red", s(ScalarType::UChar)),
+                ("green", s(ScalarType::UChar)),
+                ("blue", s(ScalarType::UChar)),
+            ]
+        );
+        assert!(ply.header.comments.iter().any(|c| c == "affordance 0 none"));
+        for (i, id) in ids.iter().enumerate() {
+            let line = format!("affordance {} {id}", i + 1);
+            assert!(ply.header.comments.contains(&line), "{line}");
+        }
+        let v = &ply.payload["vertex"];
+        let rgb = |e: &DefaultElement| {
+            ["red", "green", "blue"].map(|k| match e[k] {
+                Property::UChar(c) => c,
+                ref p => panic!("{k}: {p:?}"),
+            })
+        };
+        let legend = |id: &str| {
+            crate::render::AFFORDANCE_LEGEND
+                .iter()
+                .find(|(l, _)| *l == id)
+                .unwrap()
+                .1
+        };
+        let want = [
+            legend("headrest"),
+            UNLABELLED,
+            legend("armrest"),
+            legend("sitting"),
+            UNLABELLED,
+        ];
+        assert_eq!(v.iter().map(rgb).collect::<Vec<_>>(), want);
+        assert_eq!(v[0]["detection"], Property::Int(1));
+        assert_eq!(v[1]["detection"], Property::Int(-1));
+        assert_eq!(v[0]["affordance"], Property::Int(4));
+        // The mesh of the same detections carries the same colours.
+        let mesh = agent_mesh_bytes(&[detection(
+            &["sitting", "armrest", "backrest"],
+            vec![cyl([0.0; 3], [0.0, 0.0, 0.3], 0.05)],
+        )]);
+        let body = mesh.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+        assert_eq!(mesh[body + 12..body + 15], legend("armrest"));
     }
 
     #[test]

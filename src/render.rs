@@ -26,11 +26,14 @@ pub struct Image {
 }
 
 /// The fine-grained affordances drawn with their own colour, coarsest first.
-pub const AFFORDANCE_LEGEND: [(&str, [u8; 3]); 4] = [
+pub const AFFORDANCE_LEGEND: [(&str, [u8; 3]); 7] = [
     ("sitting", [255, 140, 0]),
     ("backrest", [225, 35, 150]),
     ("armrest", [40, 160, 255]),
     ("headrest", [120, 230, 40]),
+    ("lying", [140, 80, 220]),
+    ("raised_legs", [230, 200, 0]),
+    ("raised_body", [0, 185, 185]),
 ];
 
 /// Colour of a detection with affordances that are none of [`AFFORDANCE_LEGEND`].
@@ -43,7 +46,7 @@ const BACKGROUND: [u8; 3] = [255, 255, 255];
 const INVALID_CELL: [u8; 3] = [28, 28, 32];
 const INK: [u8; 3] = [20, 20, 20];
 /// Height of the legend strip under the height map, pixels.
-pub const LEGEND_HEIGHT: u32 = 34;
+pub const LEGEND_HEIGHT: u32 = 46;
 /// Smallest width of a height-map image, so that its legend fits, pixels.
 pub const LEGEND_MIN_WIDTH: u32 = 280;
 /// Radius of the seat circle of a detection, metres.
@@ -51,14 +54,25 @@ const SEAT_RADIUS: f64 = 0.10;
 /// Length of the heading arrow of a detection, metres.
 const HEADING_LENGTH: f64 = 0.30;
 
-/// The colour of the finest affordance in `affordances` (ids of one detection): the one
-/// latest in [`AFFORDANCE_LEGEND`] (headrest over armrest over backrest over sitting);
-/// [`OTHER_AFFORDANCE`] if none is in the legend.
-pub fn affordance_colour(affordances: &[String]) -> [u8; 3] {
+/// The finest affordance in `affordances` (ids of one detection, in hierarchy order): the
+/// one latest in [`AFFORDANCE_LEGEND`] (headrest over armrest over backrest over sitting;
+/// raised body over raised legs over lying flat), else the last one; `None` for none.
+pub fn finest_affordance(affordances: &[String]) -> Option<&str> {
     AFFORDANCE_LEGEND
         .iter()
         .rev()
-        .find(|(id, _)| affordances.iter().any(|a| a == id))
+        .find_map(|(id, _)| affordances.iter().find(|a| a == id))
+        .or(affordances.last())
+        .map(String::as_str)
+}
+
+/// The colour of the finest affordance in `affordances` ([`finest_affordance`]) from
+/// [`AFFORDANCE_LEGEND`]; [`OTHER_AFFORDANCE`] if it is not in the legend.
+pub fn affordance_colour(affordances: &[String]) -> [u8; 3] {
+    let finest = finest_affordance(affordances);
+    AFFORDANCE_LEGEND
+        .iter()
+        .find(|(id, _)| Some(*id) == finest)
         .map_or(OTHER_AFFORDANCE, |(_, c)| *c)
 }
 
@@ -455,9 +469,14 @@ fn draw_legend(img: &mut Image, top: i64, lo: f64, hi: f64) {
         HYPOTHESIS_COLOUR,
     );
     img.text(x + 16, y, "hypothesis", 1, INK);
-    let y = top + 20;
+    let mut y = top + 20;
     let mut x = 4;
     for (id, c) in AFFORDANCE_LEGEND {
+        // Wrap to a second row when the entry (box and ~6 px per letter) would not fit.
+        if x + 12 + 6 * id.len() as i64 > i64::from(img.width) {
+            x = 4;
+            y += 12;
+        }
         img.fill_rect(x, y - 1, 9, 9, INK);
         img.fill_rect(x + 1, y, 7, 7, c);
         x = img.text(x + 12, y, id, 1, INK) + 6;
@@ -804,7 +823,23 @@ mod tests {
             affordance_colour(&strs(&["sitting", "armrest", "backrest"])),
             AFFORDANCE_LEGEND[2].1
         );
-        assert_eq!(affordance_colour(&strs(&["lying"])), OTHER_AFFORDANCE);
+        assert_eq!(
+            affordance_colour(&strs(&["lying", "elongated_body", "stretched_legs"])),
+            AFFORDANCE_LEGEND[4].1
+        );
+        assert_eq!(
+            affordance_colour(&strs(&["lying", "raised_body", "raised_legs"])),
+            AFFORDANCE_LEGEND[6].1
+        );
+        assert_eq!(affordance_colour(&strs(&["perching"])), OTHER_AFFORDANCE);
+        assert_eq!(affordance_colour(&[]), OTHER_AFFORDANCE);
+        let finest = |a: &[&str]| finest_affordance(&strs(a)).map(String::from);
+        assert_eq!(
+            finest(&["sitting", "armrest", "backrest"]).unwrap(),
+            "armrest"
+        );
+        assert_eq!(finest(&["perching", "footrest"]).unwrap(), "footrest");
+        assert_eq!(finest(&[]), None);
         let m = HeightMap {
             x0: -0.5,
             y0: -0.5,

@@ -227,14 +227,15 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     }
 }
 
-/// Writes the input cloud (world frame) with the per-point detection index (-1 for none).
+/// Writes the input cloud (world frame) with its segments ([`crate::agent_mesh::segments_ply`]).
 fn write_segments(input: &Input, target: &Path, r: &FileReport) -> Result<(), cloud::CloudError> {
-    let labels: Vec<f64> = r
-        .labels
-        .iter()
-        .map(|l| l.map_or(-1.0, |i| i as f64))
-        .collect();
-    cloud::write_ply_points(target, &input.cloud.points, &[("detection", labels)], true)
+    crate::agent_mesh::segments_ply(
+        &input.cloud.points,
+        &r.detections,
+        &r.labels,
+        &r.ids,
+        target,
+    )
 }
 
 /// The warnings and frame notes of an input, one line each.

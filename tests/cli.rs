@@ -110,11 +110,21 @@ fn segments_carry_a_detection_index_per_point() {
     ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let bytes = std::fs::read(&seg).unwrap();
-    let header = text(&bytes[..400.min(bytes.len())]);
-    assert!(header.contains("property float detection"), "{header}");
+    let header = text(&bytes[..1000.min(bytes.len())]);
+    assert!(header.contains("property int detection"), "{header}");
+    assert!(
+        header.contains("comment affordance 2 armrest\n"),
+        "{header}"
+    );
     let n = afford::cloud::read_ply(Path::new(&seg)).unwrap().len();
     let m = afford::cloud::read_ply(Path::new(SAMPLE)).unwrap().len();
     assert_eq!(n, m);
+    // The sample's armchair and chair (armrest, code 2) and stool (sitting, code 1).
+    let code = afford::cloud::read_ply_property(Path::new(&seg), "affordance").unwrap();
+    let code = code.unwrap();
+    for c in [0.0, 1.0, 2.0] {
+        assert!(code.contains(&c), "no point with affordance {c}");
+    }
 }
 
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {

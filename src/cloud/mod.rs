@@ -18,8 +18,8 @@ pub use frame::{
 };
 pub use mesh::{read_mesh, sample_mesh};
 pub use pcd::{read_pcd, write_pcd};
-pub(crate) use ply::Scalar;
 pub use ply::{read_ply, read_ply_property, write_ply_points};
+pub(crate) use ply::{write_ply_typed, Scalar};
 pub use xyz::read_xyz;
 
 /// A point cloud in metres, z up (the environment P, section 3.1).

@@ -122,6 +122,52 @@ impl Scalar {
         !matches!(self, Scalar::F32 | Scalar::F64)
     }
 
+    /// The type's name in a PLY header (`uchar`, `int`, `float`, ...).
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            Scalar::I8 => "char",
+            Scalar::U8 => "uchar",
+            Scalar::I16 => "short",
+            Scalar::U16 => "ushort",
+            Scalar::I32 => "int",
+            Scalar::U32 => "uint",
+            Scalar::F32 => "float",
+            Scalar::F64 => "double",
+        }
+    }
+
+    /// Writes `v` as this type, little-endian (`as` casts: integers truncated and saturated).
+    fn write_le<W: Write>(self, w: &mut W, v: f64) -> io::Result<()> {
+        match self {
+            Scalar::I8 => w.write_all(&(v as i8).to_le_bytes()),
+            Scalar::U8 => w.write_all(&(v as u8).to_le_bytes()),
+            Scalar::I16 => w.write_all(&(v as i16).to_le_bytes()),
+            Scalar::U16 => w.write_all(&(v as u16).to_le_bytes()),
+            Scalar::I32 => w.write_all(&(v as i32).to_le_bytes()),
+            Scalar::U32 => w.write_all(&(v as u32).to_le_bytes()),
+            Scalar::F32 => w.write_all(&(v as f32).to_le_bytes()),
+            Scalar::F64 => w.write_all(&v.to_le_bytes()),
+        }
+    }
+
+    /// Writes `v` as this type in ascii, with the casts of [`Scalar::write_le`]; NaN as
+    /// `nan`, as C's printf writes it, which most PLY tools read.
+    fn write_ascii<W: Write>(self, w: &mut W, v: f64) -> io::Result<()> {
+        let v = self.decode(&self.le_bytes(v), false);
+        match self {
+            _ if v.is_nan() => write!(w, "nan"),
+            Scalar::F32 => write!(w, "{}", v as f32),
+            _ => write!(w, "{v}"),
+        }
+    }
+
+    /// The little-endian bytes [`Scalar::write_le`] writes.
+    fn le_bytes(self, v: f64) -> Vec<u8> {
+        let mut b = Vec::with_capacity(8);
+        let _ = self.write_le(&mut b, v);
+        b
+    }
+
     /// Decodes `b` (exactly `self.size()` bytes) as a number.
     pub(crate) fn decode(self, b: &[u8], big: bool) -> f64 {
         macro_rules! num {
@@ -703,12 +749,29 @@ pub fn write_ply_points(
     extra: &[(&str, Vec<f64>)],
     binary: bool,
 ) -> Result<(), CloudError> {
-    for (name, values) in extra {
+    let typed: Vec<_> = extra
+        .iter()
+        .map(|(n, v)| (*n, Scalar::F32, v.as_slice()))
+        .collect();
+    write_ply_typed(path, points, &typed, &[], binary)
+}
+
+/// [`write_ply_points`] with a PLY type per extra property (integers are written as `v as
+/// i32`, `v as u8`, ...: truncated towards zero and saturated) and `comment` lines in the
+/// header after `comment written by afford`.
+pub(crate) fn write_ply_typed(
+    path: &Path,
+    points: &[Point3<f64>],
+    extra: &[(&str, Scalar, &[f64])],
+    comments: &[String],
+    binary: bool,
+) -> Result<(), CloudError> {
+    for (name, _, values) in extra {
         let at = format!("property '{name}'");
         if name.is_empty() || name.chars().any(|c| c.is_whitespace() || c.is_control()) {
             return Err(header_err(path, at, "property name must be one word"));
         }
-        if ["x", "y", "z"].contains(name) || extra.iter().filter(|(n, _)| n == name).count() > 1 {
+        if ["x", "y", "z"].contains(name) || extra.iter().filter(|e| e.0 == *name).count() > 1 {
             return Err(header_err(path, at, "property name used twice"));
         }
         if values.len() != points.len() {
@@ -719,11 +782,18 @@ pub fn write_ply_points(
             ));
         }
     }
+    if let Some(c) = comments.iter().find(|c| c.contains(['\n', '\r'])) {
+        return Err(header_err(
+            path,
+            "comment",
+            format!("'{}' is not one line", shorten(c)),
+        ));
+    }
     let tmp = temp_path(path);
     let result = File::create(&tmp)
         .and_then(|f| {
             let mut w = BufWriter::new(f);
-            write_body(&mut w, points, extra, binary)?;
+            write_body(&mut w, points, extra, comments, binary)?;
             let f = w.into_inner().map_err(|e| e.into_error())?;
             f.sync_all()
         })
@@ -744,7 +814,8 @@ fn temp_path(path: &Path) -> PathBuf {
 fn write_body<W: Write>(
     w: &mut W,
     points: &[Point3<f64>],
-    extra: &[(&str, Vec<f64>)],
+    extra: &[(&str, Scalar, &[f64])],
+    comments: &[String],
     binary: bool,
 ) -> io::Result<()> {
     let format = if binary {
@@ -753,32 +824,34 @@ fn write_body<W: Write>(
         "ascii"
     };
     writeln!(w, "ply\nformat {format} 1.0\ncomment written by afford")?;
+    for c in comments {
+        writeln!(w, "comment {c}")?;
+    }
     writeln!(w, "element vertex {}", points.len())?;
-    for name in ["x", "y", "z"].iter().chain(extra.iter().map(|(n, _)| n)) {
-        writeln!(w, "property float {name}")?;
+    let xyz = ["x", "y", "z"].map(|n| (n, Scalar::F32));
+    let props = xyz
+        .iter()
+        .copied()
+        .chain(extra.iter().map(|(n, t, _)| (*n, *t)));
+    for (name, ty) in props {
+        writeln!(w, "property {} {name}", ty.name())?;
     }
     writeln!(w, "end_header")?;
     for (i, p) in points.iter().enumerate() {
-        let values = p
-            .coords
-            .iter()
-            .copied()
-            .chain(extra.iter().map(|(_, v)| v[i]));
-        if binary {
-            for v in values {
-                w.write_all(&(v as f32).to_le_bytes())?;
-            }
-        } else {
-            for (k, v) in values.enumerate() {
-                let sep = if k == 0 { "" } else { " " };
-                let v = v as f32;
-                if v.is_nan() {
-                    // As C's printf writes it, which most PLY tools read.
-                    write!(w, "{sep}nan")?;
-                } else {
-                    write!(w, "{sep}{v}")?;
+        let values = (0..3)
+            .map(|k| (Scalar::F32, p[k]))
+            .chain(extra.iter().map(|(_, t, v)| (*t, v[i])));
+        for (k, (ty, v)) in values.enumerate() {
+            if binary {
+                ty.write_le(w, v)?;
+            } else {
+                if k > 0 {
+                    w.write_all(b" ")?;
                 }
+                ty.write_ascii(w, v)?;
             }
+        }
+        if !binary {
             writeln!(w)?;
         }
     }
@@ -1037,6 +1110,35 @@ mod tests {
             let entries: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
             assert_eq!(entries.len(), 1, "temporary file left behind");
         }
+    }
+
+    #[test]
+    fn typed_writer_writes_integers_and_comments() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.ply");
+        let pts = [Point3::new(0.5, 1.0, 2.0), Point3::new(3.0, 4.0, 5.0)];
+        let extra = [
+            ("label", Scalar::I32, &[-1.0, 7.9][..]),
+            ("red", Scalar::U8, &[300.0, 12.0][..]),
+        ];
+        let comments = ["affordance 1 sitting".to_string()];
+        write_ply_typed(&p, &pts, &extra, &comments, false).unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.contains("comment affordance 1 sitting\nelement vertex 2\n"));
+        assert!(text.contains("property int label\nproperty uchar red\nend_header\n"));
+        assert!(
+            text.ends_with("end_header\n0.5 1 2 -1 255\n3 4 5 7 12\n"),
+            "{text}"
+        );
+        write_ply_typed(&p, &pts, &extra, &comments, true).unwrap();
+        assert_eq!(read_ply(&p).unwrap(), pts);
+        assert_eq!(
+            read_ply_property(&p, "red").unwrap(),
+            Some(vec![255.0, 12.0])
+        );
+        let bad = ["two\nlines".to_string()];
+        let e = write_ply_typed(&p, &pts, &extra, &bad, true).unwrap_err();
+        assert!(matches!(e, CloudError::Header { .. }), "{e}");
     }
 
     #[test]
