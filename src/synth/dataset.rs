@@ -968,8 +968,9 @@ struct Scene {
 /// back of the head to the ankles (about 0.85 H = 1.5 m); the feet may overhang.
 pub const LYING_MIN_LENGTH: f64 = 1.6;
 /// Narrowest surface labelled `lying`, metres: the width of the back that rests on it
-/// (the shoulders, 0.45 m, may overhang a little).
-pub const LYING_MIN_WIDTH: f64 = 0.40;
+/// (spine and shoulder blades, ~0.30 m); the shoulders (0.45 m) and arms may overhang, as
+/// on a park bench.
+pub const LYING_MIN_WIDTH: f64 = 0.30;
 /// Shortest sofa seat (between the arms) labelled `lying`, metres: two seats; the head
 /// rests on one arm and the ankles on the other (a 1.0 m seat and two arms span the
 /// ~1.5 m from the back of the head to the ankles). A one-seat armchair does not.

@@ -1,0 +1,197 @@
+//! The lying hierarchy (affordances/lying.toml) on furniture built in the test: which of
+//! its fine-grained affordances a flat bed, an adjustable bed with the head or the feet
+//! raised, a short bench and a chair give, at three body heights; and the child body on
+//! the same scene as the adult in one pass.
+
+use std::path::Path;
+
+use afford::agent::Agent;
+use afford::cloud::PointCloud;
+use afford::detect::{detect, detect_all, prepare, DetectConfig, Outcome};
+use afford::fit::fit;
+use afford::hierarchy::Hierarchy;
+use afford::hypotheses::Hypothesis;
+use afford::model_set::{load_set, Source};
+use afford::synth::*;
+use afford::unfold::unfold;
+use nalgebra::{Point3, UnitQuaternion, Vector3};
+
+fn lying(height: f64) -> (Agent, Hierarchy) {
+    let agent = Agent::load(Path::new("agents/human.toml"), height).unwrap();
+    let h = Hierarchy::load(Path::new("affordances/lying.toml"), &agent).unwrap();
+    (agent, h)
+}
+
+fn cloud(m: &Mesh) -> PointCloud {
+    scene_cloud(std::slice::from_ref(m), 2500.0, 0.002, 7, true)
+}
+
+/// The lying affordances of the scene (any detection), in hierarchy order.
+fn affords(o: &Outcome) -> Vec<String> {
+    let ids = [
+        "lying",
+        "elongated_body",
+        "raised_body",
+        "stretched_legs",
+        "raised_legs",
+    ];
+    ids.iter()
+        .filter(|id| {
+            o.detections
+                .iter()
+                .any(|d| d.affordances.iter().any(|a| a == *id))
+        })
+        .map(|s| s.to_string())
+        .collect()
+}
+
+fn check(m: &Mesh, expected: &[&str]) {
+    let c = cloud(m);
+    // The extremes of the heights the paper evaluates (1.75 m lies between them).
+    for height in [1.65, 1.85] {
+        let (agent, h) = lying(height);
+        let o = detect(&c, &agent, &h, &DetectConfig::default());
+        assert_eq!(
+            affords(&o),
+            expected,
+            "at body height {height}: {:?}",
+            o.stats
+        );
+    }
+}
+
+/// A mattress from `x0` to `x1`, 1.4 m wide, with its top at `top` metres, down to the floor.
+fn mattress(m: &mut Mesh, x0: f64, x1: f64, top: f64) {
+    m.add_box(
+        Point3::new(x0, -0.7, 0.0),
+        Point3::new(x1, 0.7, top),
+        Part::LyingSurface,
+    );
+}
+
+/// A flat section of length `len` (m) hinged at `(x, top)` and raised by `deg` towards
+/// -x (`dir` = -1) or +x (`dir` = 1), as in an adjustable bed, 0.12 m thick.
+fn raised_section(m: &mut Mesh, x: f64, top: f64, len: f64, deg: f64, dir: f64) {
+    let a = deg.to_radians();
+    let centre = Point3::new(
+        x + dir * (len / 2.0) * a.cos(),
+        0.0,
+        top + (len / 2.0) * a.sin() - 0.06 * a.cos(),
+    );
+    let rot = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), -dir * a);
+    m.add_oriented_box(
+        centre,
+        Vector3::new(len / 2.0, 0.7, 0.06),
+        rot,
+        Part::LyingSurface,
+    );
+}
+
+#[test]
+fn a_flat_bed_affords_lying_flat_with_stretched_legs() {
+    let mut m = Mesh::new();
+    mattress(&mut m, -1.0, 1.0, 0.5);
+    check(&m, &["lying", "elongated_body", "stretched_legs"]);
+}
+
+/// The lying affordances of the agent fitted with its pelvis over `(x, 0)` and its feet
+/// towards +x (heading 0), then unfolded: the hierarchy's answer for that one placement
+/// (the whole detector may also find other ways to lie on the same bed).
+fn unfolded_at(m: &Mesh, height: f64, x: f64) -> Vec<String> {
+    let (agent, h) = lying(height);
+    let cfg = DetectConfig::default();
+    let c = cloud(m);
+    let prepared = prepare(&c, &cfg);
+    let top = 0.5;
+    let hyp = Hypothesis {
+        cell: (0, 0),
+        position: Point3::new(x, 0.0, top),
+        top,
+        availability: 1.0,
+        heading: Some(0.0),
+        memberships: [1.0; 3],
+    };
+    let fits = fit(&agent, &h, &prepared.scene, &hyp, &cfg.contact);
+    let f = fits
+        .iter()
+        .find(|f| f.placement.yaw.abs() < 1e-6)
+        .expect("a stable fit with the feet towards +x");
+    let u = unfold(&agent, &h, &prepared.scene, f, &cfg.contact);
+    h.nodes
+        .iter()
+        .zip(&u.nodes)
+        .filter(|(_, o)| o.found)
+        .map(|(n, _)| n.id.clone())
+        .collect()
+}
+
+#[test]
+fn a_bed_with_the_head_raised_affords_lying_with_a_raised_body() {
+    // Head section 0.8 m raised 45 deg at x < -0.3; flat from there to the foot end.
+    let mut m = Mesh::new();
+    mattress(&mut m, -0.3, 1.2, 0.5);
+    raised_section(&mut m, -0.3, 0.5, 0.8, 45.0, -1.0);
+    for height in [1.65, 1.85] {
+        assert_eq!(
+            unfolded_at(&m, height, -0.15),
+            ["lying", "raised_body", "stretched_legs"],
+            "at {height} m"
+        );
+    }
+}
+
+#[test]
+fn a_bed_with_the_feet_raised_affords_lying_with_raised_legs() {
+    // Foot section 0.9 m raised 25 deg at x > 0.35; flat towards the head end.
+    let mut m = Mesh::new();
+    mattress(&mut m, -1.4, 0.35, 0.5);
+    raised_section(&mut m, 0.35, 0.5, 0.9, 25.0, 1.0);
+    for height in [1.65, 1.85] {
+        assert_eq!(
+            unfolded_at(&m, height, 0.3),
+            ["lying", "elongated_body", "raised_legs"],
+            "at {height} m"
+        );
+    }
+}
+
+#[test]
+fn a_short_bench_and_a_chair_do_not_afford_lying() {
+    let short = BenchParams {
+        length: 1.2,
+        seat_depth: 0.45,
+        ..BenchParams::default()
+    };
+    check(&bench(&short), &[]);
+    check(&chair(&ChairParams::default()), &[]);
+}
+
+#[test]
+fn a_child_and_an_adult_run_in_one_pass_over_one_scene() {
+    // A 1.2 m seat of 0.45 m: too short for an adult to lie on, long enough for a child of
+    // 1.20 m (back of the head to ankles ~1.0 m); both bodies see the same voxelised scene.
+    let mut m = Mesh::new();
+    m.add_box(
+        Point3::new(-0.6, -0.35, 0.0),
+        Point3::new(0.6, 0.35, 0.40),
+        Part::LyingSurface,
+    );
+    let agents = [
+        Source::File("agents/human.toml".into()),
+        Source::File("agents/child.toml".into()),
+    ];
+    let hs = [Source::File("affordances/lying.toml".into())];
+    let adult = load_set(&agents[..1], &hs, &[1.75]).unwrap();
+    let child = load_set(&agents[1..], &hs, &[1.20]).unwrap();
+    let both: Vec<_> = adult.iter().chain(&child).cloned().collect();
+    let c = cloud(&m);
+    let out = detect_all(&c, &both, &DetectConfig::default());
+    assert_eq!(out.len(), 2);
+    assert!(affords(&out[0]).is_empty(), "adult: {:?}", affords(&out[0]));
+    assert!(
+        affords(&out[1]).contains(&"lying".to_string()),
+        "child: {:?}",
+        out[1].stats
+    );
+    assert!(out[1].detections.iter().all(|d| d.agent == "child"));
+}
