@@ -1,5 +1,6 @@
 //! Batch runs over many files: input lists, deterministic shards, per-file outputs that a
-//! later run can resume from, and the JSON log line per file.
+//! later run can resume from, the JSON log line per file, and reading saved outputs back
+//! (so that `afford eval` can score the outputs of several shards together).
 
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -8,7 +9,7 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-/// What went wrong with a list, a shard or an output folder.
+/// What went wrong with a list, a shard, an output folder or a saved output.
 #[derive(Debug, thiserror::Error)]
 pub enum BatchError {
     /// A folder given as input could not be listed.
@@ -40,6 +41,23 @@ pub enum BatchError {
         first: PathBuf,
         /// The second input.
         second: PathBuf,
+    },
+    /// A saved output could not be read.
+    #[error("{path}: cannot read: {source}")]
+    SavedIo {
+        /// The saved output.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A saved output is not a detect JSON (version 2) or summary CSV.
+    #[error("{path}: {what}")]
+    Saved {
+        /// The saved output.
+        path: PathBuf,
+        /// What is wrong.
+        what: String,
     },
 }
 
@@ -236,6 +254,255 @@ impl LogLine {
     }
 }
 
+/// What a saved output says of one body on one file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SavedBody {
+    /// Agent name.
+    pub agent: String,
+    /// Body height, metres (as saved: three decimals).
+    pub height: f64,
+    /// Affordance ids found by a detection of this body.
+    pub found: Vec<String>,
+}
+
+/// What saved outputs say of one input file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SavedFile {
+    /// The input as named in the run that saved it.
+    pub file: String,
+    /// The saved output it was read from.
+    pub source: PathBuf,
+    /// Each body run on the file, in the saved order.
+    pub bodies: Vec<SavedBody>,
+}
+
+impl SavedFile {
+    /// The body `agent` at `height` (compared at the three decimals of the outputs).
+    pub fn body(&self, agent: &str, height: f64) -> Option<&SavedBody> {
+        let h = format!("{height:.3}");
+        self.bodies
+            .iter()
+            .find(|b| b.agent == agent && format!("{:.3}", b.height) == h)
+    }
+}
+
+#[derive(Deserialize)]
+struct Doc {
+    version: u32,
+    files: Vec<DocFile>,
+}
+
+#[derive(Deserialize)]
+struct DocFile {
+    file: String,
+    runs: Vec<DocRun>,
+    detections: Vec<DocDetection>,
+}
+
+#[derive(Deserialize)]
+struct DocRun {
+    agent: String,
+    height: f64,
+}
+
+#[derive(Deserialize)]
+struct DocDetection {
+    agent: String,
+    height: f64,
+    affordances: Vec<String>,
+}
+
+/// Reads a detect JSON (`--json` or one file of `--out-dir`, version 2).
+fn saved_json(text: &str, path: &Path) -> Result<Vec<SavedFile>, BatchError> {
+    let bad = |what: String| BatchError::Saved {
+        path: path.to_path_buf(),
+        what,
+    };
+    let doc: Doc = serde_json::from_str(text)
+        .map_err(|e| bad(format!("not an `afford detect` JSON output: {e}")))?;
+    if doc.version != 2 {
+        return Err(bad(format!(
+            "JSON version {} (this afford reads version 2)",
+            doc.version
+        )));
+    }
+    Ok(doc
+        .files
+        .into_iter()
+        .map(|f| {
+            let mut bodies: Vec<SavedBody> = Vec::new();
+            for r in &f.runs {
+                if !bodies
+                    .iter()
+                    .any(|b| b.agent == r.agent && b.height == r.height)
+                {
+                    bodies.push(SavedBody {
+                        agent: r.agent.clone(),
+                        height: r.height,
+                        found: Vec::new(),
+                    });
+                }
+            }
+            for d in &f.detections {
+                let body = bodies
+                    .iter_mut()
+                    .find(|b| b.agent == d.agent && b.height == d.height);
+                if let Some(b) = body {
+                    for id in &d.affordances {
+                        if !b.found.contains(id) {
+                            b.found.push(id.clone());
+                        }
+                    }
+                }
+            }
+            SavedFile {
+                file: f.file,
+                source: path.to_path_buf(),
+                bodies,
+            }
+        })
+        .collect())
+}
+
+/// Reads a summary CSV (`--summary`): `file`, one 0/1 column per id, `agent`, `height`.
+fn saved_summary(text: &str, path: &Path) -> Result<Vec<SavedFile>, BatchError> {
+    let bad = |what: String| BatchError::Saved {
+        path: path.to_path_buf(),
+        what,
+    };
+    let mut rd = csv::Reader::from_reader(text.as_bytes());
+    let headers = rd.headers().map_err(|e| bad(e.to_string()))?.clone();
+    let col = |n: &str| headers.iter().position(|h| h == n);
+    let (Some(fcol), Some(acol), Some(hcol)) = (col("file"), col("agent"), col("height")) else {
+        return Err(bad(
+            "not an `afford detect --summary` CSV (needs columns file, agent, height)".into(),
+        ));
+    };
+    let mut out: Vec<SavedFile> = Vec::new();
+    for (i, rec) in rd.records().enumerate() {
+        let line = i + 2;
+        let rec = rec.map_err(|e| bad(format!("line {line}: {e}")))?;
+        let cell = |c: usize| rec.get(c).unwrap_or("");
+        let height: f64 = cell(hcol)
+            .parse()
+            .map_err(|_| bad(format!("line {line}: height '{}'", cell(hcol))))?;
+        let mut found = Vec::new();
+        for (c, id) in headers.iter().enumerate() {
+            if c == fcol || c == acol || c == hcol {
+                continue;
+            }
+            match cell(c) {
+                "1" => found.push(id.to_string()),
+                "0" => {}
+                v => {
+                    return Err(bad(format!(
+                        "line {line}: column '{id}': '{v}' is not 0 or 1"
+                    )))
+                }
+            }
+        }
+        let body = SavedBody {
+            agent: cell(acol).to_string(),
+            height,
+            found,
+        };
+        match out.iter_mut().find(|f| f.file == cell(fcol)) {
+            Some(f) => f.bodies.push(body),
+            None => out.push(SavedFile {
+                file: cell(fcol).to_string(),
+                source: path.to_path_buf(),
+                bodies: vec![body],
+            }),
+        }
+    }
+    Ok(out)
+}
+
+/// Reads saved detect outputs: JSON files (`--json`, or the files of `--out-dir`), summary
+/// CSV files (`--summary`, by the `.csv` extension), and folders, which stand for the
+/// `.json` files in them (not recursive). A file saved in several of them is kept once
+/// if they agree, and refused if they do not.
+pub fn read_saved(paths: &[PathBuf]) -> Result<Vec<SavedFile>, BatchError> {
+    let mut sources = Vec::new();
+    for p in paths {
+        if p.is_dir() {
+            let found =
+                crate::input::files_in(p, &["json"]).map_err(|source| BatchError::SavedIo {
+                    path: p.clone(),
+                    source,
+                })?;
+            sources.extend(found);
+        } else {
+            sources.push(p.clone());
+        }
+    }
+    let mut out: Vec<SavedFile> = Vec::new();
+    for s in &sources {
+        let text = std::fs::read_to_string(s).map_err(|source| BatchError::SavedIo {
+            path: s.clone(),
+            source,
+        })?;
+        let csv = s.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+        let files = if csv {
+            saved_summary(&text, s)?
+        } else {
+            saved_json(&text, s)?
+        };
+        for f in files {
+            match out.iter().find(|o| o.file == f.file) {
+                Some(o) if o.bodies == f.bodies => {}
+                Some(o) => {
+                    return Err(BatchError::Saved {
+                        path: s.clone(),
+                        what: format!(
+                            "{} is also in {}, with other detections",
+                            f.file,
+                            o.source.display()
+                        ),
+                    })
+                }
+                None => out.push(f),
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The saved file that is the labelled file `file` (as written in a labels CSV) at
+/// `path` (resolved against the CSV): the one whose path ends with the components of
+/// `file`; among several, the one that is the same file on disk. `Err` says why none.
+pub fn find_saved<'a>(
+    saved: &'a [SavedFile],
+    file: &str,
+    path: &Path,
+) -> Result<&'a SavedFile, String> {
+    let hits: Vec<&SavedFile> = saved
+        .iter()
+        .filter(|s| Path::new(&s.file).ends_with(file))
+        .collect();
+    match hits[..] {
+        [] => Err("not in the saved outputs".to_string()),
+        [one] => Ok(one),
+        _ => {
+            let same = |s: &&SavedFile| {
+                let a = std::fs::canonicalize(&s.file);
+                a.is_ok() && a.ok() == std::fs::canonicalize(path).ok()
+            };
+            let exact: Vec<&SavedFile> = hits.iter().copied().filter(same).collect();
+            match exact[..] {
+                [one] => Ok(one),
+                _ => Err(format!(
+                    "saved under several names: {}",
+                    hits.iter()
+                        .map(|s| s.file.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )),
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -300,5 +567,47 @@ mod tests {
             e.contains("a/chair.ply") && e.contains("chair.ply.json"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_summary_and_a_json_of_the_same_run_read_alike() {
+        let json = r#"{"version": 2, "files": [{"file": "d/a.ply", "points": 3,
+            "dropped_non_finite": 0, "affordances": ["sitting"],
+            "runs": [{"agent": "human", "height": 1.65, "hierarchy": "sitting"},
+                     {"agent": "human", "height": 1.75, "hierarchy": "sitting"}],
+            "detections": [{"agent": "human", "height": 1.75,
+                            "affordances": ["sitting", "backrest"]}]}]}"#;
+        let summary = "file,sitting,backrest,agent,height\n\
+                       d/a.ply,0,0,human,1.650\nd/a.ply,1,1,human,1.750\n";
+        let a = saved_json(json, Path::new("x.json")).unwrap();
+        let b = saved_summary(summary, Path::new("x.csv")).unwrap();
+        assert_eq!(a[0].bodies, b[0].bodies);
+        assert_eq!(a[0].body("human", 1.75).unwrap().found.len(), 2);
+        assert!(a[0].body("human", 1.85).is_none());
+        assert!(
+            saved_json(r#"{"version": 1, "files": []}"#, Path::new("x.json"))
+                .unwrap_err()
+                .to_string()
+                .contains("version 1")
+        );
+    }
+
+    #[test]
+    fn a_labelled_file_is_found_by_its_trailing_components() {
+        let s = |f: &str| SavedFile {
+            file: f.to_string(),
+            source: PathBuf::from("s.json"),
+            bodies: Vec::new(),
+        };
+        let saved = [s("/scratch/set/views/a.ply"), s("/scratch/set/a.ply")];
+        let p = Path::new("x");
+        assert_eq!(
+            find_saved(&saved, "views/a.ply", p).unwrap().file,
+            "/scratch/set/views/a.ply"
+        );
+        assert!(find_saved(&saved, "a.ply", p)
+            .unwrap_err()
+            .contains("several"));
+        assert!(find_saved(&saved, "b.ply", p).is_err());
     }
 }

@@ -92,6 +92,11 @@ struct EvalArgs {
     /// Write the scores as CSV.
     #[arg(long)]
     csv: Option<PathBuf>,
+    /// Score saved `afford detect` results instead of running detection: --json files,
+    /// --summary CSV files, or --out-dir folders (their .json files), e.g. of several
+    /// shards. They must hold the same --agent and --affordances at every --heights.
+    #[arg(long, value_name = "PATH", num_args = 1..)]
+    from: Vec<PathBuf>,
     #[command(flatten)]
     input: InputArgs,
     /// No progress bar.
@@ -207,7 +212,8 @@ Batch runs:
   --shard K/N sorts all inputs by path and keeps every N-th starting at the K-th (K from
   1), so N runs given the same inputs share them without overlap. --out-dir DIR saves each
   input's results as DIR/<file name>.json (the --json format, one file), written when the
-  input is done; with --resume, inputs whose JSON is already there are skipped.
+  input is done; with --resume, inputs whose JSON is already there are skipped. Merge the
+  saved results of all shards with `afford eval labels.csv --from DIR`.
   As each input ends, its table goes to stdout (unless an output file is asked for), or
   with --log-json one JSON line: {\"file\", \"status\": \"ok\"|\"error\"|\"skipped\",
   \"error\", \"points\", \"detections\", \"affordances\", \"seconds\"} (fields that do not
@@ -377,6 +383,7 @@ fn main() -> ExitCode {
                     json: a.json,
                     csv: a.csv,
                     input,
+                    from: a.from,
                     quiet: a.quiet || !std::io::stderr().is_terminal(),
                 },
                 &mut std::io::stdout().lock(),

@@ -563,6 +563,9 @@ pub struct EvalRequest {
     pub csv: Option<PathBuf>,
     /// How the labelled files are read (units, frame, mesh sampling).
     pub input: InputOptions,
+    /// Score these saved detect outputs instead of running detection
+    /// ([`crate::eval::evaluate_saved`]); empty to run detection.
+    pub from: Vec<PathBuf>,
     /// No progress bar.
     pub quiet: bool,
 }
@@ -587,14 +590,24 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
             return 2;
         }
     };
-    let ev = crate::eval::evaluate(
-        &req.labels,
-        &req.heights,
-        &agents[0],
-        &hierarchies,
-        &req.input,
-        !req.quiet,
-    );
+    let ev = if req.from.is_empty() {
+        crate::eval::evaluate(
+            &req.labels,
+            &req.heights,
+            &agents[0],
+            &hierarchies,
+            &req.input,
+            !req.quiet,
+        )
+    } else {
+        crate::eval::evaluate_saved(
+            &req.labels,
+            &req.heights,
+            &agents[0],
+            &hierarchies,
+            &req.from,
+        )
+    };
     let ev = match ev {
         Ok(ev) => ev,
         Err(e) => {

@@ -1,5 +1,5 @@
 //! Batch runs as a script or a cluster runs them: lists, shards, per-file outputs with
-//! resume, the JSON log line and exit codes.
+//! resume, the JSON log line, exit codes, and `afford eval --from` merging shards.
 
 use std::collections::BTreeSet;
 use std::io::Write;
@@ -296,4 +296,100 @@ fn each_table_is_written_as_its_file_ends() {
     let at = |what: &str| seq.find(what).unwrap_or_else(|| panic!("{what}: {seq}"));
     assert!(at("c00.xyz: 3 points") < at("missing.pcd"), "{seq}");
     assert!(at("missing.pcd") < at("c01.xyz: 3 points"), "{seq}");
+}
+
+/// The markdown of an evaluation without its segmentation part (saved outputs have none).
+fn without_segmentation(md: &str) -> String {
+    let mut out = String::new();
+    let mut skip = false;
+    for l in md.lines() {
+        if l.starts_with("Segmentation") {
+            skip = true;
+        } else if skip && (l.is_empty() || l.starts_with("- ")) {
+            continue;
+        } else {
+            skip = false;
+        }
+        if !skip {
+            out.push_str(l);
+            out.push('\n');
+        }
+    }
+    out
+}
+
+#[test]
+fn eval_of_two_merged_shards_scores_as_eval_run_directly() {
+    let d = tempfile::tempdir().unwrap();
+    let set = d.path().join("set");
+    let o = afford(&[
+        "synth",
+        "--out",
+        &s(&set),
+        "--seed",
+        "5",
+        "--count",
+        "1",
+        "2",
+        "1",
+        "0",
+        "--stride",
+        "4",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let labels = s(&set.join("labels.csv"));
+    // The sitting hierarchy alone keeps it quick; two heights check per-height scoring.
+    let common = ["--affordances", "sitting"];
+    let eval = |more: &[&str]| {
+        let mut args = vec!["eval", &labels, "--heights", "1.65,1.75"];
+        args.extend(common);
+        args.extend(more);
+        afford(&args)
+    };
+    let direct_csv = s(&d.path().join("direct.csv"));
+    let direct = eval(&["--csv", &direct_csv]);
+    assert!(direct.status.success(), "{}", text(&direct.stderr));
+
+    // Shard 1 saves per-file JSON in a folder, shard 2 writes a run-wide JSON.
+    let saved = d.path().join("saved");
+    let whole = s(&d.path().join("shard2.json"));
+    for (k, out) in [
+        ("1/2", ["--out-dir", &s(&saved)]),
+        ("2/2", ["--json", &whole]),
+    ] {
+        let mut args = vec!["detect", set.to_str().unwrap(), "--height", "1.65,1.75"];
+        args.extend(["--shard", k]);
+        args.extend(out);
+        args.extend(common);
+        let o = afford(&args);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+    }
+    assert_eq!(names_in(&saved).len(), 2);
+
+    let merged_csv = s(&d.path().join("merged.csv"));
+    let merged = eval(&[
+        "--csv",
+        &merged_csv,
+        "--from",
+        saved.to_str().unwrap(),
+        &whole,
+    ]);
+    assert!(merged.status.success(), "{}", text(&merged.stderr));
+    let (a, b) = (text(&direct.stdout), text(&merged.stdout));
+    assert!(a.contains("4 files scored, 0 doubtful, 0 failed"), "{a}");
+    assert_eq!(without_segmentation(&a), without_segmentation(&b));
+    assert!(b.contains("Segmentation: not scored"), "{b}");
+    assert_eq!(
+        std::fs::read(&direct_csv).unwrap(),
+        std::fs::read(&merged_csv).unwrap()
+    );
+
+    // A shard missing from the merge: its files count as failed, exit code 2.
+    let part = eval(&["--from", saved.to_str().unwrap()]);
+    assert_eq!(part.status.code(), Some(2));
+    assert!(
+        text(&part.stdout).contains("2 files scored, 0 doubtful, 2 failed"),
+        "{}",
+        text(&part.stdout)
+    );
 }
