@@ -170,14 +170,15 @@ impl std::fmt::Display for Shard {
 impl Shard {
     /// This shard's part of `files`: sorted by path, then every `count`-th file starting
     /// at the `index`-th. The shards of one list are disjoint and together hold all of it,
-    /// whatever order the list came in.
+    /// whatever order the list came in. A shard outside `1..=count` (which only a hand-made
+    /// `Shard` can be) selects nothing.
     pub fn select(&self, files: &[PathBuf]) -> Vec<PathBuf> {
         let mut sorted = files.to_vec();
         sorted.sort();
         sorted
             .into_iter()
             .enumerate()
-            .filter(|(i, _)| i % self.count == self.index - 1)
+            .filter(|(i, _)| self.count > 0 && i % self.count + 1 == self.index)
             .map(|(_, f)| f)
             .collect()
     }

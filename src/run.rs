@@ -182,7 +182,13 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     let files = &inputs.files;
     let several = inputs.total > 1;
     let bar = if req.progress && files.len() > 1 {
-        indicatif::ProgressBar::new(files.len() as u64)
+        let bar = indicatif::ProgressBar::new(files.len() as u64);
+        if let Ok(style) =
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} {wide_msg}")
+        {
+            bar.set_style(style);
+        }
+        bar
     } else {
         indicatif::ProgressBar::hidden()
     };
