@@ -8,6 +8,9 @@
 //! non-empty are left out of the main table and scored apart. Files that cannot be read
 //! are counted and listed, not fatal.
 //!
+//! [`evaluate_saved`] scores saved `afford detect` outputs instead (for example those of
+//! several shards of one dataset), with the same scores as running detection.
+//!
 //! Undefined ratios: precision is `None` when nothing was predicted positive
 //! (`tp + fp = 0`), recall is `None` when there is no positive label (`tp + fn = 0`), and
 //! the F-score `2 tp / (2 tp + fp + fn)` is `None` only when both are (no positive label,
@@ -28,7 +31,7 @@ use serde::Serialize;
 use crate::cloud;
 use crate::detect::{detect_all, DetectConfig};
 use crate::model::ModelError;
-use crate::model_set::{ids as ids_of, load_set, Source};
+use crate::model_set::{ids as ids_of, load_set, Model, Source};
 use crate::report::{self, FileReport};
 
 /// What went wrong before any file could be scored.
@@ -54,6 +57,9 @@ pub enum EvalError {
     /// The agent or hierarchy could not be loaded.
     #[error(transparent)]
     Model(#[from] ModelError),
+    /// Saved detect outputs (`--from`) could not be read.
+    #[error(transparent)]
+    Saved(#[from] crate::batch::BatchError),
 }
 
 /// One row of a labels file.
@@ -242,6 +248,9 @@ pub struct Evaluation {
     pub failed: Vec<(String, String)>,
     /// One entry per height, in the order asked.
     pub heights: Vec<HeightResult>,
+    /// Scored from saved `afford detect` outputs ([`evaluate_saved`]) rather than by
+    /// running detection; they hold no per-point labels, so there is no segmentation IoU.
+    pub from_saved: bool,
 }
 
 fn fmt(x: Option<f64>) -> String {
@@ -293,8 +302,15 @@ impl Evaluation {
             s.push_str("\nDoubtful rows (labels by convention), apart:\n\n");
             table(&mut s, &|h| &h.doubtful_scores);
         }
-        s.push_str("\nSegmentation (mean IoU over positive files with a `part` property):\n\n");
-        for h in &self.heights {
+        if self.from_saved {
+            s.push_str(
+                "\nSegmentation: not scored (saved detections hold no per-point labels; \
+                 run `afford eval` without --from for it).\n",
+            );
+        } else {
+            s.push_str("\nSegmentation (mean IoU over positive files with a `part` property):\n\n");
+        }
+        for h in self.heights.iter().filter(|_| !self.from_saved) {
             s.push_str(&format!(
                 "- {:.2} m: {} over {} files\n",
                 h.height,
@@ -396,19 +412,22 @@ pub fn iou(a: &[bool], b: &[bool]) -> Option<f64> {
 /// What one file gave at every height: found ids and segmentation IoU.
 type FileOutcome = Result<Vec<(Vec<String>, Option<f64>)>, String>;
 
-/// Runs detection on every file of `labels_csv` (paths relative to it) for the agent
-/// `agent` scaled to each of `heights` (metres) with the hierarchy `affordances` (the
-/// built-in models where `None`), and
-/// scores the answers (see the module documentation). Files run in parallel (rayon);
-/// `progress` shows a progress bar on stderr.
-pub fn evaluate(
+/// What an evaluation scores against: the models (one set per height), the label rows,
+/// the ids of the hierarchies and the scored ids (those with a label column).
+struct Setup {
+    models: Vec<Vec<Model>>,
+    rows: Vec<LabelRow>,
+    hier_ids: Vec<String>,
+    ids: Vec<String>,
+}
+
+/// Loads the models at every height and reads the labels.
+fn setup(
     labels_csv: &Path,
     heights: &[f64],
     agent: &Source,
     hierarchies: &[Source],
-    input: &crate::input::InputOptions,
-    progress: bool,
-) -> Result<Evaluation, EvalError> {
+) -> Result<Setup, EvalError> {
     let models = heights
         .iter()
         .map(|&h| load_set(std::slice::from_ref(agent), hierarchies, &[h]))
@@ -424,6 +443,30 @@ pub fn evaluate(
         path: labels_csv.to_path_buf(),
         what,
     })?;
+    Ok(Setup {
+        models,
+        rows,
+        hier_ids,
+        ids,
+    })
+}
+
+/// Runs detection on every file of `labels_csv` (paths relative to it) for the agent
+/// `agent` scaled to each of `heights` (metres) with the hierarchy `affordances` (the
+/// built-in models where `None`), and
+/// scores the answers (see the module documentation). Files run in parallel (rayon);
+/// `progress` shows a progress bar on stderr.
+pub fn evaluate(
+    labels_csv: &Path,
+    heights: &[f64],
+    agent: &Source,
+    hierarchies: &[Source],
+    input: &crate::input::InputOptions,
+    progress: bool,
+) -> Result<Evaluation, EvalError> {
+    let Setup {
+        models, rows, ids, ..
+    } = setup(labels_csv, heights, agent, hierarchies)?;
     let bar = if progress {
         indicatif::ProgressBar::new(rows.len() as u64)
     } else {
@@ -481,6 +524,59 @@ pub fn evaluate(
         .collect();
     bar.finish_and_clear();
     Ok(score(labels_csv, heights, &ids, &rows, &outcomes))
+}
+
+/// Scores saved `afford detect` outputs (`--json` files, `--summary` CSV files, `--out-dir`
+/// folders: see [`crate::batch::read_saved`]) against `labels_csv`, as [`evaluate`] would
+/// score running detection with the same models, without the segmentation IoU. A labelled
+/// file is matched to the saved file whose path ends with its `file` cell; a labelled file
+/// not saved, or saved without a run of the agent at one of `heights`, counts as failed.
+pub fn evaluate_saved(
+    labels_csv: &Path,
+    heights: &[f64],
+    agent: &Source,
+    hierarchies: &[Source],
+    saved: &[PathBuf],
+) -> Result<Evaluation, EvalError> {
+    let Setup {
+        models,
+        rows,
+        hier_ids,
+        ids,
+    } = setup(labels_csv, heights, agent, hierarchies)?;
+    let saved = crate::batch::read_saved(saved)?;
+    let agent = models
+        .first()
+        .and_then(|m| m.first())
+        .map(|m| m.agent.name.clone())
+        .unwrap_or_default();
+    let outcomes: Vec<FileOutcome> = rows
+        .iter()
+        .map(|row| {
+            let s = crate::batch::find_saved(&saved, &row.file, &row.path)?;
+            heights
+                .iter()
+                .map(|&h| {
+                    let body = s.body(&agent, h).ok_or_else(|| {
+                        format!(
+                            "{}: no saved run of {agent} at {h:.3} m",
+                            s.source.display()
+                        )
+                    })?;
+                    // In hierarchy order, as detection reports them.
+                    let found = hier_ids
+                        .iter()
+                        .filter(|id| body.found.contains(id))
+                        .cloned()
+                        .collect();
+                    Ok((found, None))
+                })
+                .collect()
+        })
+        .collect();
+    let mut ev = score(labels_csv, heights, &ids, &rows, &outcomes);
+    ev.from_saved = true;
+    Ok(ev)
 }
 
 /// Scores the outcomes of `rows` (one entry per row, one element per height).
@@ -578,6 +674,7 @@ fn score(
         doubtful_files,
         failed,
         heights,
+        from_saved: false,
     }
 }
 

@@ -95,27 +95,32 @@ pub fn load_input(path: &Path, opts: &InputOptions) -> Result<Input, InputError>
 /// such files are usually labels and notes.
 pub const EXTENSIONS: [&str; 6] = ["ply", "pcd", "xyz", "obj", "off", "stl"];
 
+/// The files in folder `dir` (not recursive) whose extension is one of `extensions`
+/// (lower case; compared without case), sorted by name.
+pub fn files_in(dir: &Path, extensions: &[&str]) -> std::io::Result<Vec<PathBuf>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|f| {
+            f.is_file()
+                && f.extension()
+                    .and_then(|e| e.to_str())
+                    .is_some_and(|e| extensions.contains(&e.to_ascii_lowercase().as_str()))
+        })
+        .collect();
+    files.sort();
+    Ok(files)
+}
+
 /// Expands the inputs of a run: a folder stands for the files in it with one of
 /// [`EXTENSIONS`] (not recursive), sorted by name; files are kept as given.
 pub fn expand_inputs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, CloudError> {
     let mut out = Vec::new();
     for p in paths {
         if p.is_dir() {
-            let entries = std::fs::read_dir(p).map_err(|source| CloudError::Io {
+            out.extend(files_in(p, &EXTENSIONS).map_err(|source| CloudError::Io {
                 path: p.clone(),
                 source,
-            })?;
-            let mut files: Vec<PathBuf> = entries
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|f| {
-                    f.is_file()
-                        && f.extension()
-                            .and_then(|e| e.to_str())
-                            .is_some_and(|e| EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
-                })
-                .collect();
-            files.sort();
-            out.extend(files);
+            })?);
         } else {
             out.push(p.clone());
         }

@@ -11,6 +11,7 @@
 
 pub mod agent;
 pub mod agent_mesh;
+pub mod batch;
 pub mod cloud;
 pub mod detect;
 pub mod eval;

@@ -1,8 +1,10 @@
 //! The `afford` command line: parses arguments and calls the library.
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use afford::batch::{BatchError, Shard};
 use afford::cloud::{parse_matrix, FloorMode, FrameOptions, Units, Up};
 use afford::detect::DetectConfig;
 use afford::input::InputOptions;
@@ -20,6 +22,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Detect fine-grained affordances in point clouds (PLY, PCD, XYZ).
+    #[command(after_help = DETECT_AFTER_HELP)]
     Detect(DetectArgs),
     /// Draw the height map, the hypotheses and the posed agents of one cloud as a PNG.
     Inspect(InspectArgs),
@@ -89,6 +92,11 @@ struct EvalArgs {
     /// Write the scores as CSV.
     #[arg(long)]
     csv: Option<PathBuf>,
+    /// Score saved `afford detect` results instead of running detection: --json files,
+    /// --summary CSV files, or --out-dir folders (their .json files), e.g. of several
+    /// shards. They must hold the same --agent and --affordances at every --heights.
+    #[arg(long, value_name = "PATH", num_args = 1..)]
+    from: Vec<PathBuf>,
     #[command(flatten)]
     input: InputArgs,
     /// No progress bar.
@@ -193,12 +201,49 @@ struct InspectArgs {
     input: InputArgs,
 }
 
+/// How `afford detect` runs over many files, shown after the options of `--help`.
+const DETECT_AFTER_HELP: &str = "\
+Batch runs:
+  Inputs are the FILES (files and folders) and then every --list, in that order; a folder
+  stands for the clouds and meshes in it (not recursive). A list file has one path per
+  line, relative to the list's folder (or absolute); blank lines and lines starting with #
+  are skipped; `--list -` reads the list from standard input (paths relative to the
+  working directory).
+  --shard K/N sorts all inputs by path and keeps every N-th starting at the K-th (K from
+  1), so N runs given the same inputs share them without overlap. --out-dir DIR saves each
+  input's results as DIR/<file name>.json (the --json format, one file), written when the
+  input is done; with --resume, inputs whose JSON is already there are skipped. Merge the
+  saved results of all shards with `afford eval labels.csv --from DIR`.
+  As each input ends, its table goes to stdout (unless an output file is asked for), or
+  with --log-json one JSON line: {\"file\", \"status\": \"ok\"|\"error\"|\"skipped\",
+  \"error\", \"points\", \"detections\", \"affordances\", \"seconds\"} (fields that do not
+  apply are left out; \"seconds\" is wall time, the only part that differs between runs).
+  Exit code: 0 when every input was done or skipped, 2 when anything failed (an input
+  could not be read, an output not written, or the arguments, models or lists are wrong).";
+
 #[derive(clap::Args)]
 struct DetectArgs {
     /// Point clouds or meshes (metres, z up, floor at z = 0, unless said otherwise below),
     /// or folders of them.
-    #[arg(required = true)]
+    #[arg(required_unless_present = "list")]
     files: Vec<PathBuf>,
+    /// A file listing inputs, one path per line (relative to the list; `#` comments);
+    /// `-` reads standard input. Repeat for several.
+    #[arg(long, value_name = "FILE")]
+    list: Vec<PathBuf>,
+    /// Run only shard K of N (K from 1): every N-th input, starting at the K-th, after
+    /// sorting all inputs by path.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard)]
+    shard: Option<Shard>,
+    /// Save each input's results as DIR/<file name>.json (the --json format), as it ends.
+    #[arg(long, value_name = "DIR")]
+    out_dir: Option<PathBuf>,
+    /// Skip inputs whose results are already saved in --out-dir.
+    #[arg(long, requires = "out_dir")]
+    resume: bool,
+    /// Write one JSON line per input on stdout as it ends, instead of the table.
+    #[arg(long)]
+    log_json: bool,
     #[command(flatten)]
     models: ModelArgs,
     #[command(flatten)]
@@ -221,9 +266,16 @@ struct DetectArgs {
     /// Worker threads (default: all cores); the output does not depend on it.
     #[arg(long)]
     threads: Option<usize>,
-    /// No progress bar.
+    /// No progress bar (there is none either when stderr is not a terminal).
     #[arg(long, short)]
     quiet: bool,
+}
+
+fn parse_shard(s: &str) -> Result<Shard, String> {
+    s.parse().map_err(|e| match e {
+        BatchError::Shard { why, .. } => why.to_string(),
+        e => e.to_string(),
+    })
 }
 
 fn parse_height(s: &str) -> Result<f64, String> {
@@ -276,6 +328,11 @@ fn main() -> ExitCode {
             }
             let req = DetectRequest {
                 files: a.files,
+                lists: a.list,
+                shard: a.shard,
+                out_dir: a.out_dir,
+                resume: a.resume,
+                log_json: a.log_json,
                 models: a.models.choice(),
                 json: a.json,
                 csv: a.csv,
@@ -284,7 +341,7 @@ fn main() -> ExitCode {
                 mesh: a.mesh,
                 config: config(&a.models),
                 input,
-                quiet: a.quiet,
+                progress: !a.quiet && std::io::stderr().is_terminal(),
             };
             let code = run_detect(
                 &req,
@@ -326,7 +383,8 @@ fn main() -> ExitCode {
                     json: a.json,
                     csv: a.csv,
                     input,
-                    quiet: a.quiet,
+                    from: a.from,
+                    quiet: a.quiet || !std::io::stderr().is_terminal(),
                 },
                 &mut std::io::stdout().lock(),
                 &mut std::io::stderr().lock(),

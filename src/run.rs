@@ -5,6 +5,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use crate::agent::Agent;
+use crate::batch::{self, LogLine, Shard, Status};
 use crate::cloud;
 use crate::detect::{detect_all, DetectConfig};
 use crate::hierarchy::Hierarchy;
@@ -46,8 +47,18 @@ impl ModelChoice {
 /// Everything `afford detect` was asked to do, validated.
 #[derive(Debug, Clone)]
 pub struct DetectRequest {
-    /// Input clouds.
+    /// Input clouds and folders of them.
     pub files: Vec<PathBuf>,
+    /// Input lists (see [`crate::batch::read_list`]), read after `files`.
+    pub lists: Vec<PathBuf>,
+    /// Run only this shard of the inputs (see [`crate::batch::Shard::select`]).
+    pub shard: Option<Shard>,
+    /// Save each input's JSON in this folder (see [`crate::batch::saved_name`]).
+    pub out_dir: Option<PathBuf>,
+    /// Skip inputs whose JSON is already in `out_dir`.
+    pub resume: bool,
+    /// Write one JSON line per input on `out` ([`crate::batch::LogLine`]) instead of the table.
+    pub log_json: bool,
     /// Bodies and hierarchies.
     pub models: ModelChoice,
     /// JSON output.
@@ -64,8 +75,9 @@ pub struct DetectRequest {
     pub config: DetectConfig,
     /// How inputs are read and brought into the world frame.
     pub input: InputOptions,
-    /// No progress bar.
-    pub quiet: bool,
+    /// Show a progress bar on stderr when there are several inputs (the caller says
+    /// whether stderr is a terminal and the user did not ask for quiet).
+    pub progress: bool,
 }
 
 /// Loads the agent file scaled to `height` and the hierarchy file resolved against it.
@@ -135,9 +147,18 @@ pub fn per_input_path(base: &Path, input: &Path, several: bool) -> PathBuf {
     base.with_file_name(format!("{stem}.{inp}.ply"))
 }
 
-/// Runs `afford detect`; returns the process exit code (0 all files done, 2 any failure).
-/// Results go to `out` (the table, when no output file is asked for), diagnostics to `err`.
+/// Runs `afford detect`; returns the process exit code (0 every input done or skipped, 2
+/// any failure). Inputs run one after the other; as each ends, its table (when no output
+/// file is asked for) or its `--log-json` line goes to `out`, and its diagnostics to `err`.
+/// The run-wide outputs (`--json`, `--csv`, `--summary`) are written at the end.
 pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    if req.resume && req.out_dir.is_none() {
+        let _ = writeln!(
+            err,
+            "error: --resume needs --out-dir (where the saved results are)"
+        );
+        return 2;
+    }
     let models = match req.models.load() {
         Ok(m) => m,
         Err(e) => {
@@ -145,59 +166,96 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             return 2;
         }
     };
-    let files = match crate::input::expand_inputs(&req.files) {
-        Ok(f) => f,
+    let inputs = match batch::gather(&req.files, &req.lists, req.shard, req.out_dir.is_some()) {
+        Ok(i) => i,
         Err(e) => {
             let _ = writeln!(err, "error: {e}");
             return 2;
         }
     };
-    let several = files.len() > 1;
-    let bar = if req.quiet || !several {
-        indicatif::ProgressBar::hidden()
+    if let Some(d) = &req.out_dir {
+        if let Err(e) = std::fs::create_dir_all(d) {
+            let _ = writeln!(err, "error: {}: cannot create: {e}", d.display());
+            return 2;
+        }
+    }
+    let files = &inputs.files;
+    let several = inputs.total > 1;
+    let bar = if req.progress && files.len() > 1 {
+        let bar = indicatif::ProgressBar::new(files.len() as u64);
+        if let Ok(style) =
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} {wide_msg}")
+        {
+            bar.set_style(style);
+        }
+        bar
     } else {
-        indicatif::ProgressBar::new(files.len() as u64)
+        indicatif::ProgressBar::hidden()
     };
+    let table = !req.log_json
+        && req.json.is_none()
+        && req.csv.is_none()
+        && req.summary.is_none()
+        && req.out_dir.is_none();
     let mut reports = Vec::new();
-    let mut failed = 0usize;
-    for path in &files {
+    let (mut failed, mut skipped) = (0usize, 0usize);
+    for path in files {
         bar.set_message(path.display().to_string());
-        match load_input(path, &req.input) {
-            Ok(input) => {
-                bar.suspend(|| notes(&input, path, err));
-                let r = report_of(
-                    path,
-                    &input.cloud,
-                    input.dropped_non_finite,
-                    &models,
-                    &req.config,
-                );
-                if let Some(base) = &req.segments {
-                    let target = per_input_path(base, path, several);
-                    if let Err(e) = write_segments(&input, &target, &r) {
-                        let _ = bar.suspend(|| writeln!(err, "error: {e}"));
-                        failed += 1;
-                    }
-                }
-                if let Some(base) = &req.mesh {
-                    let target = per_input_path(base, path, several);
-                    if let Err(e) = crate::agent_mesh::agent_mesh_ply(&r.detections, &target) {
-                        let _ = bar.suspend(|| {
-                            writeln!(err, "error: {}: cannot write: {e}", target.display())
-                        });
-                        failed += 1;
-                    }
-                }
+        let saved = req
+            .out_dir
+            .as_ref()
+            .map(|d| d.join(batch::saved_name(path)));
+        let mut line = LogLine {
+            file: path.display().to_string(),
+            status: Status::Skipped,
+            error: None,
+            points: None,
+            detections: None,
+            affordances: None,
+            seconds: None,
+        };
+        let done = if req.resume && saved.as_ref().is_some_and(|s| s.exists()) {
+            skipped += 1;
+            None
+        } else {
+            let start = std::time::Instant::now();
+            let done = detect_one(req, &models, path, several, saved.as_deref());
+            line.seconds = Some((start.elapsed().as_secs_f64() * 1000.0).round() / 1000.0);
+            Some(done)
+        };
+        bar.suspend(|| {
+            let Some(done) = &done else { return };
+            let _ = err.write_all(&done.notes);
+            for e in &done.errors {
+                let _ = writeln!(err, "error: {e}");
+            }
+            if let (true, Some(r)) = (table, &done.report) {
+                let _ = out.write_all(report::to_table(r).as_bytes());
+            }
+        });
+        if let Some(done) = done {
+            line.status = if done.errors.is_empty() {
+                Status::Ok
+            } else {
+                failed += 1;
+                line.error = Some(done.errors.join("; "));
+                Status::Error
+            };
+            if let Some(r) = done.report {
+                line.points = Some(r.points);
+                line.detections = Some(r.detections.len());
+                line.affordances = Some(report::affords(&r, None).into_iter().cloned().collect());
                 reports.push(r);
             }
-            Err(e) => {
-                let _ = bar.suspend(|| writeln!(err, "error: {e}"));
-                failed += 1;
-            }
         }
+        if req.log_json {
+            let _ = bar.suspend(|| writeln!(out, "{}", line.to_json()));
+        }
+        let _ = out.flush();
         bar.inc(1);
     }
     bar.finish_and_clear();
+    let mut unwritten = 0usize;
     let mut write = |target: &Option<PathBuf>, text: Result<String, csv::Error>| {
         if let Some(p) = target {
             let done = text
@@ -205,26 +263,90 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
                 .and_then(|t| report::write_atomic(p, t.as_bytes()).map_err(|e| e.to_string()));
             if let Err(e) = done {
                 let _ = writeln!(err, "error: {}: cannot write: {e}", p.display());
-                failed += 1;
+                unwritten += 1;
             }
         }
     };
     write(&req.json, Ok(report::to_json(&reports)));
     write(&req.csv, report::to_csv(&reports));
     write(&req.summary, report::to_summary(&reports));
-    if req.json.is_none() && req.csv.is_none() && req.summary.is_none() {
-        for r in &reports {
-            let _ = out.write_all(report::to_table(r).as_bytes());
+    if several || req.shard.is_some() {
+        let mut s = match req.shard {
+            Some(k) => format!("shard {k}: {} of {} files", files.len(), inputs.total),
+            None => format!("{} files", files.len()),
+        };
+        s.push_str(&format!(", {failed} failed"));
+        if req.resume {
+            s.push_str(&format!(", {skipped} skipped (saved before)"));
         }
+        let _ = writeln!(err, "{s}");
     }
-    if several {
-        let _ = writeln!(err, "{} files, {} failed", files.len(), failed);
-    }
-    if failed > 0 {
+    if failed + unwritten > 0 {
         2
     } else {
         0
     }
+}
+
+/// What one input gave: its report (when it could be read), its notes for stderr, and
+/// the errors of reading it or writing its per-file outputs.
+struct Done {
+    report: Option<FileReport>,
+    notes: Vec<u8>,
+    errors: Vec<String>,
+}
+
+/// Reads one input, detects, and writes its per-file outputs (`--segments`, `--mesh`,
+/// and its JSON in `--out-dir` at `saved`, last, so that it marks a finished input).
+fn detect_one(
+    req: &DetectRequest,
+    models: &[Model],
+    path: &Path,
+    several: bool,
+    saved: Option<&Path>,
+) -> Done {
+    let mut done = Done {
+        report: None,
+        notes: Vec::new(),
+        errors: Vec::new(),
+    };
+    let input = match load_input(path, &req.input) {
+        Ok(i) => i,
+        Err(e) => {
+            done.errors.push(e.to_string());
+            return done;
+        }
+    };
+    notes(&input, path, &mut done.notes);
+    let r = report_of(
+        path,
+        &input.cloud,
+        input.dropped_non_finite,
+        models,
+        &req.config,
+    );
+    if let Some(base) = &req.segments {
+        let target = per_input_path(base, path, several);
+        if let Err(e) = write_segments(&input, &target, &r) {
+            done.errors.push(e.to_string());
+        }
+    }
+    if let Some(base) = &req.mesh {
+        let target = per_input_path(base, path, several);
+        if let Err(e) = crate::agent_mesh::agent_mesh_ply(&r.detections, &target) {
+            done.errors
+                .push(format!("{}: cannot write: {e}", target.display()));
+        }
+    }
+    if let (Some(target), true) = (saved, done.errors.is_empty()) {
+        let json = report::to_json(std::slice::from_ref(&r));
+        if let Err(e) = report::write_atomic(target, json.as_bytes()) {
+            done.errors
+                .push(format!("{}: cannot write: {e}", target.display()));
+        }
+    }
+    done.report = Some(r);
+    done
 }
 
 /// Writes the input cloud (world frame) with its segments ([`crate::agent_mesh::segments_ply`]).
@@ -447,6 +569,9 @@ pub struct EvalRequest {
     pub csv: Option<PathBuf>,
     /// How the labelled files are read (units, frame, mesh sampling).
     pub input: InputOptions,
+    /// Score these saved detect outputs instead of running detection
+    /// ([`crate::eval::evaluate_saved`]); empty to run detection.
+    pub from: Vec<PathBuf>,
     /// No progress bar.
     pub quiet: bool,
 }
@@ -471,14 +596,25 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
             return 2;
         }
     };
-    let ev = match crate::eval::evaluate(
-        &req.labels,
-        &req.heights,
-        &agents[0],
-        &hierarchies,
-        &req.input,
-        !req.quiet,
-    ) {
+    let ev = if req.from.is_empty() {
+        crate::eval::evaluate(
+            &req.labels,
+            &req.heights,
+            &agents[0],
+            &hierarchies,
+            &req.input,
+            !req.quiet,
+        )
+    } else {
+        crate::eval::evaluate_saved(
+            &req.labels,
+            &req.heights,
+            &agents[0],
+            &hierarchies,
+            &req.from,
+        )
+    };
+    let ev = match ev {
         Ok(ev) => ev,
         Err(e) => {
             let _ = writeln!(err, "error: {e}");
