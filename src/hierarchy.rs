@@ -45,6 +45,10 @@ pub struct HypothesisRule {
     pub height: Option<Trapezoid>,
     /// The availability sets used for defuzzification (Fig. 5d).
     pub available: Availability,
+    /// Distance between the cells tried, fraction of H (an extension: a lying body is
+    /// 1.7 m long, so places 5 cm apart are the same place); absent: every cell.
+    #[serde(default)]
+    pub spacing: Option<f64>,
 }
 
 /// Parameters of the initial agent fitting (section 4.2).
@@ -462,6 +466,11 @@ fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
             &score.key("support_angle"),
             format!("must be 0-180 degrees, not {}", s.support_angle),
         ));
+    }
+    if let Some(v) = h.spacing {
+        if !Positive.holds(v) {
+            return Err(src.invalid(&hyp.key("spacing"), Positive.what(v)));
+        }
     }
     if let Some(k) = f.yaw_offsets.iter().position(|y| !y.is_finite()) {
         return Err(src.invalid(&fit.key("yaw_offsets").at(k), "must be finite"));

@@ -36,9 +36,13 @@ pub fn hypotheses(
     let template = map.disc(rule_.template_diameter * body_height / 2.0);
     let neighbourhood = map.disc(rule_.gradient_radius * body_height);
     let height = rule_.height.map(|t| t.scaled(body_height));
+    // Only every `step`-th cell in x and y is tried (grid-aligned, so deterministic).
+    let step = rule_.spacing.map_or(1, |s| {
+        ((s * body_height / map.cell).round() as usize).max(1)
+    });
     let mut out = Vec::new();
-    for iy in 0..map.ny {
-        for ix in 0..map.nx {
+    for iy in (0..map.ny).step_by(step) {
+        for ix in (0..map.nx).step_by(step) {
             if map.get(ix as isize, iy as isize).is_none() {
                 continue;
             }
@@ -139,6 +143,7 @@ mod tests {
                 d: 0.6,
             }),
             available: Availability { rise: [0.3, 0.7] },
+            spacing: None,
         }
     }
 
@@ -177,6 +182,31 @@ mod tests {
         assert_eq!(c.memberships, [1.0, 1.0, 1.0]);
         // The seat is flat: no preferred heading.
         assert_eq!(c.heading, None);
+    }
+
+    #[test]
+    fn spacing_tries_every_nth_cell_of_the_grid() {
+        let m = map(|x, y| {
+            Some(if (6..14).contains(&x) && (6..14).contains(&y) {
+                0.45
+            } else {
+                0.0
+            })
+        });
+        let all = hypotheses(&m, &rule_(), Orientation::Parallel, 1.0);
+        // 0.1 H at H = 1 m over 0.05 m cells: every second cell.
+        let sparse = HypothesisRule {
+            spacing: Some(0.1),
+            ..rule_()
+        };
+        let some = hypotheses(&m, &sparse, Orientation::Parallel, 1.0);
+        assert!(some.iter().all(|h| h.cell.0 % 2 == 0 && h.cell.1 % 2 == 0));
+        let even: Vec<_> = all
+            .iter()
+            .filter(|h| h.cell.0 % 2 == 0 && h.cell.1 % 2 == 0)
+            .collect();
+        assert_eq!(some.len(), even.len());
+        assert!(!some.is_empty() && some.len() < all.len());
     }
 
     #[test]
