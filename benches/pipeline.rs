@@ -1,10 +1,11 @@
 //! Benchmarks of the pipeline stages and of the whole detection on the committed sample
-//! (`data/sample/room.ply`, 63k points) and on a generated sofa.
+//! (`data/sample/room.ply`, 90k points) and on a generated sofa: one hierarchy (sitting,
+//! lying) and the default run (both, on one shared scene).
 
 use std::path::Path;
 
 use afford::cloud;
-use afford::detect::{detect, prepare, DetectConfig};
+use afford::detect::{detect, detect_all, prepare, DetectConfig};
 use afford::heightmap::HeightMap;
 use afford::hypotheses::hypotheses;
 use afford::run::load_models;
@@ -21,6 +22,13 @@ fn stages(c: &mut Criterion) {
         1.75,
     )
     .unwrap();
+    let (_, lying) = load_models(
+        Path::new("agents/human.toml"),
+        Path::new("affordances/lying.toml"),
+        1.75,
+    )
+    .unwrap();
+    let all = afford::run::ModelChoice::default().load().unwrap();
     let cfg = DetectConfig::default();
     let mut g = c.benchmark_group("room");
     g.sample_size(10);
@@ -34,12 +42,19 @@ fn stages(c: &mut Criterion) {
     });
     g.bench_function("scene", |b| b.iter(|| Scene::new(&cloud, &cfg.scene)));
     g.bench_function("detect", |b| b.iter(|| detect(&cloud, &agent, &h, &cfg)));
+    g.bench_function("detect_lying", |b| {
+        b.iter(|| detect(&cloud, &agent, &lying, &cfg))
+    });
+    g.bench_function("detect_all", |b| b.iter(|| detect_all(&cloud, &all, &cfg)));
     g.finish();
     let sofa_cloud = scene_cloud(&[sofa(&SofaParams::default())], 4000.0, 0.002, 1, true);
     let mut g = c.benchmark_group("sofa");
     g.sample_size(10);
     g.bench_function("detect", |b| {
         b.iter(|| detect(&sofa_cloud, &agent, &h, &cfg))
+    });
+    g.bench_function("detect_lying", |b| {
+        b.iter(|| detect(&sofa_cloud, &agent, &lying, &cfg))
     });
     g.finish();
 }
