@@ -70,8 +70,13 @@ fn mattress(m: &mut Mesh, x0: f64, x1: f64, top: f64) {
 }
 
 /// A flat section of length `len` (m) hinged at `(x, top)` and raised by `deg` towards
-/// -x (`dir` = -1) or +x (`dir` = 1), as in an adjustable bed, 0.12 m thick.
+/// -x (`dir` = -1) or +x (`dir` = 1), as in an adjustable bed, 0.12 m thick, 1.4 m wide.
 fn raised_section(m: &mut Mesh, x: f64, top: f64, len: f64, deg: f64, dir: f64) {
+    raised_panel(m, x, top, len, 0.7, deg, dir);
+}
+
+/// Like [`raised_section`], `2 * half_width` wide.
+fn raised_panel(m: &mut Mesh, x: f64, top: f64, len: f64, half_width: f64, deg: f64, dir: f64) {
     let a = deg.to_radians();
     let centre = Point3::new(
         x + dir * (len / 2.0) * a.cos(),
@@ -81,7 +86,7 @@ fn raised_section(m: &mut Mesh, x: f64, top: f64, len: f64, deg: f64, dir: f64) 
     let rot = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), -dir * a);
     m.add_oriented_box(
         centre,
-        Vector3::new(len / 2.0, 0.7, 0.06),
+        Vector3::new(len / 2.0, half_width, 0.06),
         rot,
         Part::LyingSurface,
     );
@@ -153,6 +158,29 @@ fn a_bed_with_the_feet_raised_affords_lying_with_raised_legs() {
             "at {height} m"
         );
     }
+}
+
+#[test]
+fn a_recliner_opened_flat_enough_affords_lying_with_a_raised_body() {
+    // A recliner 0.7 m wide: seat 0.5 m deep at 0.45 m, back 0.8 m reclined to 40 deg
+    // above level, leg rest 0.6 m raised 10 deg; the whole detector, not one placement.
+    let mut m = Mesh::new();
+    m.add_box(
+        Point3::new(-0.25, -0.35, 0.0),
+        Point3::new(0.25, 0.35, 0.45),
+        Part::LyingSurface,
+    );
+    raised_panel(&mut m, -0.25, 0.45, 0.8, 0.35, 40.0, -1.0);
+    raised_panel(&mut m, 0.25, 0.45, 0.6, 0.35, 10.0, 1.0);
+    let c = cloud(&m);
+    let (agent, h) = lying(1.75);
+    let o = detect(&c, &agent, &h, &DetectConfig::default());
+    let found = affords(&o);
+    assert!(
+        found.contains(&"lying".to_string()) && found.contains(&"raised_body".to_string()),
+        "{found:?} {:?}",
+        o.stats
+    );
 }
 
 #[test]
