@@ -601,6 +601,255 @@ pub fn bed(params: &BedParams) -> Mesh {
 }
 
 // ---------------------------------------------------------------------------------------
+// Recliner / chaise longue
+// ---------------------------------------------------------------------------------------
+
+/// Parameters of [`recliner`]. Metres and degrees.
+///
+/// Defaults: a reclined lounge chair with its leg rest out (a chaise longue): seat
+/// (cushion top) 0.44 m high (0.40–0.48), 0.65 m wide (0.55–0.75) and 0.50 m deep, a back
+/// panel 0.80 m long (0.7–0.9) reclined to 40° above level (30–50), a leg rest 0.60 m long
+/// (0.5–0.8) raised 10° (0–25), panels 0.10 m thick, no arms; arms when enabled 0.22 m
+/// above the seat and 0.10 m wide. With `leg_rest_folded` the leg rest hangs down in front
+/// of the seat (an ordinary recliner chair with its foot rest stowed).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ReclinerParams {
+    /// Height of the seat top above the floor, metres (default 0.44).
+    pub seat_height: f64,
+    /// Seat (and panel) width (y), metres (default 0.65).
+    pub seat_width: f64,
+    /// Seat depth (x), metres (default 0.50).
+    pub seat_depth: f64,
+    /// Seat cushion thickness, metres (default 0.12); a solid base fills the rest below.
+    pub seat_thickness: f64,
+    /// Length of the back panel along its surface, from the seat's rear edge, metres
+    /// (default 0.80).
+    pub back_length: f64,
+    /// Angle of the back panel above level, degrees (default 40; 90 = upright).
+    pub back_angle_deg: f64,
+    /// Length of the leg rest along its surface, from the seat's front edge, metres
+    /// (default 0.60).
+    pub leg_rest_length: f64,
+    /// Angle of the leg rest above level, degrees (default 10), when not folded.
+    pub leg_rest_angle_deg: f64,
+    /// Whether the leg rest is folded down (hangs in front of the seat; default false).
+    pub leg_rest_folded: bool,
+    /// Thickness of the back panel and the leg rest, metres (default 0.10).
+    pub panel_thickness: f64,
+    /// Whether the recliner has arms (default false).
+    pub arms: bool,
+    /// Height of the arm tops above the seat top, metres (default 0.22).
+    pub arm_height_above_seat: f64,
+    /// Width (y) of each arm, metres (default 0.10).
+    pub arm_width: f64,
+    /// Height above the seat from which the back counts as headrest, metres (default
+    /// 0.60, as for chairs); used only when the back's top rises at least 0.70 m above the
+    /// seat.
+    pub headrest_from_above_seat: f64,
+    /// Label the seat top and the (unfolded) leg rest [`Part::LyingSurface`] instead of
+    /// [`Part::Seat`] and [`Part::Other`] (default false; set for recliners that afford
+    /// lying).
+    pub lying_surface: bool,
+}
+
+impl Default for ReclinerParams {
+    fn default() -> Self {
+        Self {
+            seat_height: 0.44,
+            seat_width: 0.65,
+            seat_depth: 0.50,
+            seat_thickness: 0.12,
+            back_length: 0.80,
+            back_angle_deg: 40.0,
+            leg_rest_length: 0.60,
+            leg_rest_angle_deg: 10.0,
+            leg_rest_folded: false,
+            panel_thickness: 0.10,
+            arms: false,
+            arm_height_above_seat: 0.22,
+            arm_width: 0.10,
+            headrest_from_above_seat: 0.60,
+            lying_surface: false,
+        }
+    }
+}
+
+impl ReclinerParams {
+    /// How high the top of the back panel rises above the seat top, metres.
+    pub fn back_rise(&self) -> f64 {
+        self.back_length * self.back_angle_deg.to_radians().sin()
+    }
+
+    /// Length of the body support along the surfaces, metres: back panel + seat depth +
+    /// leg rest (the leg rest counts only when unfolded and 0–40° above level, the range
+    /// of the lying hierarchy's raised legs).
+    pub fn support_length(&self) -> f64 {
+        let legs = !self.leg_rest_folded && (0.0..=40.0).contains(&self.leg_rest_angle_deg);
+        self.back_length + self.seat_depth + if legs { self.leg_rest_length } else { 0.0 }
+    }
+}
+
+/// Adds a flat panel whose upper face is hinged at the line x = `x`, z = `z` and runs
+/// from `s0` to `s1` (metres, along the face) towards `dir` · x (`dir` = ±1), rising
+/// `deg` above level (negative: falling); `width` across (centred on y = 0), `thick`
+/// thick below its upper face.
+#[allow(clippy::too_many_arguments)]
+fn add_hinged_panel(
+    m: &mut Mesh,
+    x: f64,
+    z: f64,
+    s0: f64,
+    s1: f64,
+    width: f64,
+    thick: f64,
+    deg: f64,
+    dir: f64,
+    part: Part,
+) {
+    if s1 <= s0 {
+        return;
+    }
+    let a = deg.to_radians();
+    let along = Vector3::new(dir * a.cos(), 0.0, a.sin());
+    let normal = Vector3::new(-dir * a.sin(), 0.0, a.cos());
+    let centre = p(x, 0.0, z) + along * ((s0 + s1) / 2.0) - normal * (thick / 2.0);
+    let rot = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), -dir * a);
+    m.add_oriented_box(
+        centre,
+        Vector3::new((s1 - s0) / 2.0, width / 2.0, thick / 2.0),
+        rot,
+        part,
+    );
+}
+
+/// Adds two square posts of side `size` from the floor to `z_top` (if above it), centred
+/// on x = `x`, inside the sides y = ±`hy`.
+fn add_side_posts(m: &mut Mesh, x: f64, z_top: f64, hy: f64, size: f64) {
+    if z_top <= 0.0 {
+        return;
+    }
+    for y in [-hy, hy - size] {
+        m.add_box(
+            p(x - size / 2.0, y, 0.0),
+            p(x + size / 2.0, y + size, z_top),
+            Part::Other,
+        );
+    }
+}
+
+/// A recliner (lounge chair, chaise longue): solid base, seat cushion (top =
+/// [`Part::Seat`]), a back panel hinged at the seat's rear (-x) edge and reclined to
+/// `back_angle_deg` above level ([`Part::Backrest`]; the part higher than
+/// `headrest_from_above_seat` above the seat is [`Part::Headrest`] when the top rises at
+/// least 0.70 m above the seat), propped by two posts, and a leg rest hinged at the seat's
+/// front (+x) edge, raised `leg_rest_angle_deg` on two posts ([`Part::Other`]), or folded
+/// down in front of the base. Optional arms beside the seat ([`Part::Armrest`] above the
+/// seat). With `lying_surface`, seat and unfolded leg rest are [`Part::LyingSurface`].
+/// Seat centre at x = y = 0, standing on z = 0, facing +x.
+pub fn recliner(params: &ReclinerParams) -> Mesh {
+    let r = params;
+    let mut m = Mesh::new();
+    let (hx, hy) = (r.seat_depth / 2.0, r.seat_width / 2.0);
+    let top = r.seat_height;
+    let base_top = (top - r.seat_thickness).max(0.0);
+    let seat_part = if r.lying_surface {
+        Part::LyingSurface
+    } else {
+        Part::Seat
+    };
+    if base_top > 0.0 {
+        m.add_box(p(-hx, -hy, 0.0), p(hx, hy, base_top), Part::Other);
+    }
+    m.add_box_with_top(
+        p(-hx, -hy, base_top),
+        p(hx, hy, top),
+        seat_part,
+        Part::Other,
+    );
+    // Back panel, split into backrest and headrest.
+    let a = r.back_angle_deg.to_radians();
+    let split = if r.back_rise() >= 0.70 && a.sin() > 1e-6 {
+        (r.headrest_from_above_seat / a.sin()).min(r.back_length)
+    } else {
+        r.back_length
+    };
+    let t = r.panel_thickness;
+    let (w, deg) = (r.seat_width, r.back_angle_deg);
+    add_hinged_panel(
+        &mut m,
+        -hx,
+        top,
+        0.0,
+        split,
+        w,
+        t,
+        deg,
+        -1.0,
+        Part::Backrest,
+    );
+    let back_len = r.back_length;
+    add_hinged_panel(
+        &mut m,
+        -hx,
+        top,
+        split,
+        back_len,
+        w,
+        t,
+        deg,
+        -1.0,
+        Part::Headrest,
+    );
+    // Posts under the middle of the back panel.
+    let post = 0.04;
+    let (mx, mz) = (
+        -hx - 0.5 * r.back_length * a.cos(),
+        top + 0.5 * r.back_length * a.sin() - t / a.cos().max(0.2),
+    );
+    add_side_posts(&mut m, mx, mz, hy, post);
+    // Leg rest.
+    if r.leg_rest_folded {
+        // Hanging (80° below level) in front of the base, clear of the floor.
+        let reach = ((top - 0.06) / 80f64.to_radians().sin()).clamp(0.0, r.leg_rest_length);
+        add_hinged_panel(&mut m, hx, top, 0.0, reach, w, t, -80.0, 1.0, Part::Other);
+    } else {
+        let part = if r.lying_surface {
+            Part::LyingSurface
+        } else {
+            Part::Other
+        };
+        let b = r.leg_rest_angle_deg.to_radians();
+        let len = r.leg_rest_length;
+        add_hinged_panel(
+            &mut m,
+            hx,
+            top,
+            0.0,
+            len,
+            w,
+            t,
+            r.leg_rest_angle_deg,
+            1.0,
+            part,
+        );
+        // Posts under its far end.
+        let (ex, ez) = (
+            hx + (len - 0.05) * b.cos(),
+            top + (len - 0.05) * b.sin() - t / b.cos().max(0.2),
+        );
+        add_side_posts(&mut m, ex, ez, hy, post);
+    }
+    if r.arms {
+        let arm_top = top + r.arm_height_above_seat;
+        for (y0, y1) in [(-hy - r.arm_width, -hy), (hy, hy + r.arm_width)] {
+            m.add_box(p(-hx, y0, 0.0), p(hx, y1, top), Part::Other);
+            m.add_box(p(-hx, y0, top), p(hx, y1, arm_top), Part::Armrest);
+        }
+    }
+    m
+}
+
+// ---------------------------------------------------------------------------------------
 // Negatives: table, desk, shelf, cabinet, wall, floor
 // ---------------------------------------------------------------------------------------
 
@@ -1150,6 +1399,123 @@ mod tests {
         assert!(!has(&m, Part::Seat));
         let single = bed(&BedParams::single());
         assert!((single.part_area(Part::LyingSurface) - 0.9 * 1.9).abs() < 1e-9);
+    }
+
+    /// The direction (degrees above level) of the principal axis of `pts` in the x-z
+    /// plane, measured away from `dir` · x.
+    fn slope_deg(pts: &[Point3<f64>], dir: f64) -> f64 {
+        let n = pts.len() as f64;
+        let (mx, mz) = (
+            pts.iter().map(|p| p.x).sum::<f64>() / n,
+            pts.iter().map(|p| p.z).sum::<f64>() / n,
+        );
+        let (mut sxx, mut sxz) = (0.0, 0.0);
+        for p in pts {
+            sxx += (p.x - mx) * (p.x - mx);
+            sxz += (p.x - mx) * (p.z - mz);
+        }
+        (dir * sxz / sxx).atan().to_degrees()
+    }
+
+    /// The highest vertex of the triangles labelled `part`.
+    fn part_top(m: &Mesh, part: Part) -> f64 {
+        (0..m.len())
+            .filter(|&i| m.parts[i] == part)
+            .flat_map(|i| m.triangle(i))
+            .map(|p| p.z)
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    #[test]
+    fn recliner_seat_reclined_back_and_leg_rest() {
+        let r = ReclinerParams::default();
+        let m = recliner(&r);
+        check_well_formed(&m);
+        let seat = labelled(&m, Part::Seat);
+        assert!((max_z(&seat) - r.seat_height).abs() < 1e-9);
+        assert!((min_z(&seat) - r.seat_height).abs() < 1e-9);
+        assert!((m.part_area(Part::Seat) - r.seat_depth * r.seat_width).abs() < 1e-9);
+        // The back rises behind the seat at its angle, to back_rise() above the seat.
+        let back = labelled(&m, Part::Backrest);
+        assert!(back.iter().all(|p| p.x <= -r.seat_depth / 2.0 + 1e-9));
+        assert!((part_top(&m, Part::Backrest) - (r.seat_height + r.back_rise())).abs() < 1e-9);
+        // The upper face of the back panel (the highest points at each x) slopes at 40°.
+        let upper: Vec<_> = back
+            .iter()
+            .copied()
+            .filter(|p| {
+                let want = r.seat_height + (-r.seat_depth / 2.0 - p.x) * 40f64.to_radians().tan();
+                (p.z - want).abs() < 0.005
+            })
+            .collect();
+        assert!(upper.len() > 500, "{}", upper.len());
+        let a = slope_deg(&upper, -1.0);
+        assert!((a - r.back_angle_deg).abs() < 1.0, "{a}");
+        // Back rise 0.51 m < 0.70 m: no headrest; no arms; no lying surface.
+        assert!(!has(&m, Part::Headrest));
+        assert!(!has(&m, Part::Armrest));
+        assert!(!has(&m, Part::LyingSurface));
+        // The leg rest reaches len · cos 10° in front of the seat, up to len · sin 10°.
+        let (lo, hi) = m.bounds().unwrap();
+        let b = r.leg_rest_angle_deg.to_radians();
+        assert!((hi.x - (r.seat_depth / 2.0 + r.leg_rest_length * b.cos())).abs() < 0.02);
+        assert!(lo.x < -r.seat_depth / 2.0 - r.back_length * 40f64.to_radians().cos() + 0.01);
+        assert!((r.support_length() - 1.9).abs() < 1e-9);
+
+        // As a lying surface: seat and leg rest, whose top is the highest at its far end.
+        let l = recliner(&ReclinerParams {
+            lying_surface: true,
+            ..r
+        });
+        assert!(!has(&l, Part::Seat));
+        let lying = labelled(&l, Part::LyingSurface);
+        let rest: Vec<_> = lying
+            .iter()
+            .copied()
+            .filter(|p| p.x > r.seat_depth / 2.0 + 0.02)
+            .collect();
+        let top = r.seat_height + r.leg_rest_length * b.sin();
+        assert!((max_z(&rest) - top).abs() < 0.01);
+        assert!((part_top(&l, Part::LyingSurface) - top).abs() < 1e-9);
+        let upper: Vec<_> = rest
+            .iter()
+            .copied()
+            .filter(|p| {
+                (p.z - (r.seat_height + (p.x - r.seat_depth / 2.0) * b.tan())).abs() < 0.003
+            })
+            .collect();
+        let a = slope_deg(&upper, 1.0);
+        assert!((a - r.leg_rest_angle_deg).abs() < 1.0, "{a}");
+    }
+
+    #[test]
+    fn recliner_folded_arms_and_headrest() {
+        let r = ReclinerParams {
+            leg_rest_folded: true,
+            arms: true,
+            back_length: 0.9,
+            back_angle_deg: 60.0,
+            lying_surface: true,
+            ..ReclinerParams::default()
+        };
+        let m = recliner(&r);
+        check_well_formed(&m);
+        // Folded: nothing in front of the seat higher than its front edge, nothing far out.
+        let (_, hi) = m.bounds().unwrap();
+        assert!(hi.x < r.seat_depth / 2.0 + 0.2, "{}", hi.x);
+        assert!((r.support_length() - 1.4).abs() < 1e-9);
+        // Only the seat top is a lying surface when folded.
+        assert!((m.part_area(Part::LyingSurface) - r.seat_depth * r.seat_width).abs() < 1e-9);
+        // Arms beside the seat at their height.
+        let arms = labelled(&m, Part::Armrest);
+        assert!((max_z(&arms) - (r.seat_height + r.arm_height_above_seat)).abs() < 1e-9);
+        assert!(arms.iter().all(|p| p.y.abs() >= r.seat_width / 2.0 - 1e-9));
+        // 0.9 · sin 60° = 0.78 m ≥ 0.70: the part above 0.60 m is headrest.
+        assert!(r.back_rise() >= 0.70);
+        let head = labelled(&m, Part::Headrest);
+        assert!(min_z(&head) >= r.seat_height + 0.60 - 0.1);
+        assert!((part_top(&m, Part::Headrest) - (r.seat_height + r.back_rise())).abs() < 1e-9);
+        assert!(part_top(&m, Part::Backrest) <= r.seat_height + 0.60 + 1e-9);
     }
 
     #[test]
