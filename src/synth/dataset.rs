@@ -1,13 +1,16 @@
 //! Labelled synthetic datasets: varied furniture, rendered as full models or depth views,
 //! written as PLY (binary, with a per-point `part` property) or PCD files plus a
-//! `labels.csv` in the format of DESIGN.md ("Interfaces others depend on").
+//! `labels.csv` in the format of DESIGN.md ("Interfaces others depend on"):
+//! `file,sitting,backrest,armrest,headrest,lying,kind,class,doubtful,points`, then the
+//! fine-grained lying columns `elongated_body,raised_body,stretched_legs,raised_legs`
+//! appended at the end so that readers of the older columns are unaffected.
 //!
 //! Labels follow from construction (see [`Labels`]):
 //! * `sitting`: a seat 0.25–0.55 m high with the feet on the floor (chairs, stools,
-//!   sofas, benches, beds). Bar stools (seat 0.65–0.80 m) are labelled 0. Low tables at seat
+//!   sofas, recliners, benches, beds). Bar stools (seat 0.65–0.80 m) are labelled 0. Low tables at seat
 //!   height are sittable by geometry but negative by convention: `sitting` 0 and a
 //!   non-empty `doubtful` column, so that evaluation can report them apart;
-//! * `backrest`: a back at least 0.25 m above the seat, or (kind `wall`) a wall within
+//! * `backrest`: a back reaching at least 0.25 m above the seat, or (kind `wall`) a wall within
 //!   0.15 m behind a backless seat;
 //! * `armrest`: arms 0.12–0.35 m above the seat, on the seat's sides;
 //! * `headrest`: a back reaching at least 0.70 m above the seat, or (kind `wall`) the wall
@@ -15,7 +18,22 @@
 //! * `lying`: a surface that carries an adult (1.75 m) on the back from head to heels: a
 //!   flat one at least [`LYING_MIN_LENGTH`] long and [`LYING_MIN_WIDTH`] wide (beds, long
 //!   benches), or a sofa at least [`LYING_MIN_SOFA_LENGTH`] long between its arms (the head
-//!   on one arm, the ankles on the other).
+//!   on one arm, the ankles on the other), or a recliner whose back panel, seat and
+//!   unfolded leg rest (0–40° above level) measure at least [`LYING_MIN_RECLINER_LENGTH`]
+//!   along their surfaces (back of the head to the ankles) with the back at most 70° above
+//!   level; a recliner with its leg rest folded down is a chair;
+//! * fine-grained lying (affordances/lying.toml; all 0 when `lying` is 0):
+//!   `elongated_body` (trunk within 25° of level) or `raised_body` (25–70°), and
+//!   `stretched_legs` (legs within 15° of level) or `raised_legs` (15–40°). Beds, long
+//!   benches and sofas at least [`LYING_MIN_LENGTH`] long between the arms: elongated body,
+//!   stretched legs (the body lies flat on the cushions). Recliners: the trunk at the back
+//!   panel's angle (30–50°: raised body), the legs at the leg rest's (0–25°: stretched up to
+//!   15°, raised above). Shorter lying sofas (1.0–1.6 m between the arms) are left
+//!   undecided, written as empty cells (not scored by `afford eval`): the head and ankles
+//!   rest on arms 0.14–0.30 m above the seat, which tilts the trunk by roughly 15–35° and
+//!   the legs by 10–20° depending on arm height, seat length and how the person settles —
+//!   on both sides of the 25° and 15° borders — and one may as well curl up or let the feet
+//!   hang over an arm.
 //!
 //! Per-point `part` codes: 0 other (legs, frames, floor, walls), 1 seat, 2 backrest,
 //! 3 armrest, 4 headrest, 5 lying surface.
@@ -24,7 +42,8 @@
 //! floor patch), `view` (one depth view including the floor), `wall` (object with its back
 //! against a wall 0–0.15 m behind it, one view), `room` (2–4 non-overlapping objects in a
 //! 4 × 4 m room with walls, one view; labels are the OR over the objects whose seat or
-//! lying surface is visible). World frame: metres, z up, floor at z = 0.
+//! lying surface is visible; a fine-grained column is 1 if it is 1 for a counted object,
+//! else empty if it is undecided for one, else 0). World frame: metres, z up, floor at z = 0.
 
 use std::path::{Path, PathBuf};
 
@@ -35,8 +54,9 @@ use rayon::prelude::*;
 
 use super::camera::{render_view_triangles, Camera};
 use super::furniture::{
-    bed, bench, cabinet, desk, scene_mesh, shelf, sofa, table, BedParams, BenchParams,
-    CabinetParams, DeskParams, ShelfParams, SofaParams, TableParams, CYLINDER_SEGMENTS,
+    bed, bench, cabinet, desk, recliner, scene_mesh, shelf, sofa, table, BedParams, BenchParams,
+    CabinetParams, DeskParams, ReclinerParams, ShelfParams, SofaParams, TableParams,
+    CYLINDER_SEGMENTS,
 };
 use super::mesh::{sample_surface, Mesh, Part};
 use super::meshio::{read_mesh_ply, MeshError};
@@ -81,8 +101,22 @@ pub struct Labels {
     pub armrest: bool,
     /// A back reaching ≥ 0.70 m above the seat.
     pub headrest: bool,
-    /// A flat surface ≥ 1.9 m × 0.6 m.
+    /// A surface that carries an adult on the back from head to heels: see the
+    /// `LYING_MIN_*` constants and the module documentation.
     pub lying: bool,
+    /// Lying with the trunk within 25° of level (beds, long benches, long sofas, recliners
+    /// with a back below 25°).
+    pub elongated_body: bool,
+    /// Lying with the trunk raised 25–70° (recliners).
+    pub raised_body: bool,
+    /// Lying with the legs within 15° of level.
+    pub stretched_legs: bool,
+    /// Lying with the legs raised 15–40° (recliners with a raised leg rest).
+    pub raised_legs: bool,
+    /// The four fine-grained lying labels are not decided: a `0` among them is written as
+    /// an empty cell (not scored). Set for short sofas (the posture depends on how the
+    /// head and ankles rest on the arms) and for lying models read without those columns.
+    pub posture_unknown: bool,
 }
 
 impl Labels {
@@ -94,9 +128,50 @@ impl Labels {
             armrest: self.armrest || o.armrest,
             headrest: self.headrest || o.headrest,
             lying: self.lying || o.lying,
+            elongated_body: self.elongated_body || o.elongated_body,
+            raised_body: self.raised_body || o.raised_body,
+            stretched_legs: self.stretched_legs || o.stretched_legs,
+            raised_legs: self.raised_legs || o.raised_legs,
+            posture_unknown: self.posture_unknown || o.posture_unknown,
         }
     }
+
+    /// Sets the fine-grained lying labels of a lying posture with the trunk `trunk_deg`
+    /// and the legs `legs_deg` above level (see [`TRUNK_RAISED_DEG`], [`LEGS_RAISED_DEG`]).
+    /// Postures outside those ranges get none.
+    pub fn with_posture(mut self, trunk_deg: f64, legs_deg: f64) -> Labels {
+        let (t0, t1) = TRUNK_RAISED_DEG;
+        let (l0, l1) = LEGS_RAISED_DEG;
+        self.elongated_body = trunk_deg.abs() < t0;
+        self.raised_body = (t0..=t1).contains(&trunk_deg);
+        self.stretched_legs = legs_deg.abs() <= l0;
+        self.raised_legs = legs_deg > l0 && legs_deg <= l1;
+        self
+    }
+
+    /// The fine-grained lying columns in header order, as written: `1`, `0`, or empty when
+    /// not decided (see [`Labels::posture_unknown`]).
+    pub fn posture_cells(&self) -> [&'static str; 4] {
+        [
+            self.elongated_body,
+            self.raised_body,
+            self.stretched_legs,
+            self.raised_legs,
+        ]
+        .map(|x| match (x, self.posture_unknown) {
+            (true, _) => "1",
+            (false, true) => "",
+            (false, false) => "0",
+        })
+    }
 }
+
+/// Trunk angles above level (degrees) of lying with a raised body: from here to there;
+/// below the first it is an elongated body (affordances/lying.toml).
+pub const TRUNK_RAISED_DEG: (f64, f64) = (25.0, 70.0);
+/// Leg angles above level (degrees) of lying with raised legs: above the first up to the
+/// second; within the first of level the legs are stretched (affordances/lying.toml).
+pub const LEGS_RAISED_DEG: (f64, f64) = (15.0, 40.0);
 
 /// Furniture classes of the generator (the `class` column).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -113,6 +188,8 @@ pub enum Class {
     HighBackChair,
     /// Sofa with two to four seats.
     Sofa,
+    /// Recliner or chaise longue: back reclined 30–50°, leg rest raised 0–25° or folded.
+    Recliner,
     /// Backless bench.
     Bench,
     /// Bench with a back.
@@ -136,7 +213,7 @@ pub enum Class {
 }
 
 /// Every class, in a fixed order.
-pub const CLASSES: [Class; 16] = [
+pub const CLASSES: [Class; 17] = [
     Class::Stool,
     Class::BarStool,
     Class::Chair,
@@ -153,6 +230,7 @@ pub const CLASSES: [Class; 16] = [
     Class::Radiator,
     Class::Lamp,
     Class::LowTable,
+    Class::Recliner,
 ];
 
 /// The `doubtful` text written for low tables.
@@ -169,6 +247,7 @@ impl Class {
             Class::Armchair => "armchair",
             Class::HighBackChair => "high_back_chair",
             Class::Sofa => "sofa",
+            Class::Recliner => "recliner",
             Class::Bench => "bench",
             Class::BenchWithBack => "bench_with_back",
             Class::Bed => "bed",
@@ -191,6 +270,7 @@ impl Class {
             | Class::Bench
             | Class::BenchWithBack
             | Class::Bed
+            | Class::Recliner
             | Class::BarStool
             | Class::DiningTable
             | Class::LowTable => 2,
@@ -593,6 +673,17 @@ pub fn make_object(class: Class, rng: &mut ChaCha8Rng) -> Object {
                 armrest: (0.12..=0.35).contains(&p.arm_height_above_seat),
                 headrest: p.back_height_above_seat >= 0.70,
                 lying: len >= LYING_MIN_SOFA_LENGTH && p.seat_depth >= LYING_MIN_WIDTH,
+                ..Labels::default()
+            };
+            let labels = match (labels.lying, len >= LYING_MIN_LENGTH) {
+                // Long enough to lie flat on the cushions between the arms.
+                (true, true) => labels.with_posture(0.0, 0.0),
+                // Head and ankles on the arms: posture not decided.
+                (true, false) => Labels {
+                    posture_unknown: true,
+                    ..labels
+                },
+                (false, _) => labels,
             };
             let mut m = sofa(&p);
             if labels.lying {
@@ -628,6 +719,11 @@ pub fn make_object(class: Class, rng: &mut ChaCha8Rng) -> Object {
                 lying: p.length >= LYING_MIN_LENGTH && p.seat_depth >= LYING_MIN_WIDTH,
                 ..Labels::default()
             };
+            let labels = if labels.lying {
+                labels.with_posture(0.0, 0.0)
+            } else {
+                labels
+            };
             let mut m = bench(&p);
             if labels.lying {
                 relabel_lying(&mut m);
@@ -653,8 +749,31 @@ pub fn make_object(class: Class, rng: &mut ChaCha8Rng) -> Object {
                 sitting: true,
                 lying: true,
                 ..Labels::default()
-            };
+            }
+            .with_posture(0.0, 0.0);
             seat_obj(bed(&p), p.mattress_height, labels)
+        }
+        Class::Recliner => {
+            let mut p = ReclinerParams {
+                seat_height: u(rng, 0.40, 0.48),
+                seat_width: u(rng, 0.55, 0.75),
+                seat_depth: u(rng, 0.45, 0.55),
+                seat_thickness: u(rng, 0.08, 0.16),
+                back_length: u(rng, 0.70, 0.90),
+                back_angle_deg: u(rng, 30.0, 50.0),
+                leg_rest_length: u(rng, 0.50, 0.80),
+                leg_rest_angle_deg: u(rng, 0.0, 25.0),
+                leg_rest_folded: chance(rng, 0.35),
+                panel_thickness: u(rng, 0.06, 0.14),
+                arms: chance(rng, 0.5),
+                arm_height_above_seat: u(rng, 0.10, 0.30),
+                arm_width: u(rng, 0.06, 0.14),
+                headrest_from_above_seat: 0.60,
+                lying_surface: false,
+            };
+            let labels = recliner_labels(&p);
+            p.lying_surface = labels.lying;
+            seat_obj(recliner(&p), p.seat_height, labels)
         }
         Class::DiningTable => {
             let h = u(rng, 0.70, 0.78);
@@ -798,6 +917,31 @@ pub fn make_object(class: Class, rng: &mut ChaCha8Rng) -> Object {
         labels,
         doubtful,
         focus_height,
+    }
+}
+
+/// The labels of a recliner (see the module documentation): sitting on the seat, a
+/// backrest (its back rises ≥ 0.25 m), arms 0.12–0.35 m above the seat, a headrest when the
+/// back's top rises ≥ 0.70 m above the seat, and lying when back, seat and unfolded leg
+/// rest carry the body from the back of the head to the ankles along their surfaces
+/// ([`LYING_MIN_RECLINER_LENGTH`]) at least [`LYING_MIN_WIDTH`] wide, with the back at most
+/// 70° above level; then the posture is that of the back (trunk) and the leg rest (legs).
+pub fn recliner_labels(p: &ReclinerParams) -> Labels {
+    let lying = p.support_length() >= LYING_MIN_RECLINER_LENGTH
+        && p.seat_width >= LYING_MIN_WIDTH
+        && p.back_angle_deg <= TRUNK_RAISED_DEG.1;
+    let labels = Labels {
+        sitting: (0.25..=0.55).contains(&p.seat_height),
+        backrest: p.back_rise() >= 0.25,
+        armrest: p.arms && (0.12..=0.35).contains(&p.arm_height_above_seat),
+        headrest: p.back_rise() >= 0.70,
+        lying,
+        ..Labels::default()
+    };
+    if lying {
+        labels.with_posture(p.back_angle_deg, p.leg_rest_angle_deg)
+    } else {
+        labels
     }
 }
 
@@ -975,6 +1119,11 @@ pub const LYING_MIN_WIDTH: f64 = 0.30;
 /// rests on one arm and the ankles on the other (a 1.0 m seat and two arms span the
 /// ~1.5 m from the back of the head to the ankles). A one-seat armchair does not.
 pub const LYING_MIN_SOFA_LENGTH: f64 = 1.0;
+/// Shortest recliner support labelled `lying`, metres, measured along the surfaces of the
+/// back panel, the seat and the unfolded leg rest: the ~1.5 m (0.85 H) from the back of the
+/// head to the ankles of the 1.75 m adult; the feet may overhang. A recliner with its leg
+/// rest folded (0.70–0.90 m back + 0.45–0.55 m seat) is a chair.
+pub const LYING_MIN_RECLINER_LENGTH: f64 = 1.5;
 
 /// Least visible area of a seat or lying surface (m^2) for its labels to count in a view:
 /// about a 0.22 m square, under which the torso template (0.30 m across at 1.75 m)
@@ -1181,7 +1330,8 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SynthError + '_ {
     }
 }
 
-/// Writes a labels file with the DESIGN.md columns plus `kind,class,doubtful,points`.
+/// Writes a labels file with the DESIGN.md columns plus `kind,class,doubtful,points` and
+/// the fine-grained lying columns (see the module documentation).
 pub fn write_labels(path: &Path, rows: &[LabelRow]) -> Result<(), SynthError> {
     let lerr = |e: csv::Error| SynthError::Labels {
         path: path.to_path_buf(),
@@ -1189,13 +1339,26 @@ pub fn write_labels(path: &Path, rows: &[LabelRow]) -> Result<(), SynthError> {
     };
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
-        "file", "sitting", "backrest", "armrest", "headrest", "lying", "kind", "class", "doubtful",
+        "file",
+        "sitting",
+        "backrest",
+        "armrest",
+        "headrest",
+        "lying",
+        "kind",
+        "class",
+        "doubtful",
         "points",
+        "elongated_body",
+        "raised_body",
+        "stretched_legs",
+        "raised_legs",
     ])
     .map_err(lerr)?;
     let b = |x: bool| if x { "1" } else { "0" };
     for r in rows {
         let l = r.labels;
+        let [eb, rb, sl, rl] = l.posture_cells();
         w.write_record([
             r.file.as_str(),
             b(l.sitting),
@@ -1207,6 +1370,10 @@ pub fn write_labels(path: &Path, rows: &[LabelRow]) -> Result<(), SynthError> {
             &r.class,
             r.doubtful.as_deref().unwrap_or(""),
             &r.points.to_string(),
+            eb,
+            rb,
+            sl,
+            rl,
         ])
         .map_err(lerr)?;
     }
@@ -1326,6 +1493,82 @@ pub fn render_mesh_views(
     Ok(out)
 }
 
+/// The labels of the CSV row `rec` under `headers`. Affordance columns other than `1` are 0. The fine-grained lying columns: an
+/// empty cell, or a missing column on a lying row, leaves them undecided
+/// ([`Labels::posture_unknown`]); a missing column on a row that is not lying is 0.
+fn labels_of(headers: &csv::StringRecord, rec: &csv::StringRecord) -> Labels {
+    let cell = |n: &str| {
+        headers
+            .iter()
+            .position(|h| h.trim() == n)
+            .map(|c| rec.get(c).map(str::trim).unwrap_or(""))
+    };
+    let flag = |n: &str| cell(n) == Some("1");
+    let lying = flag("lying");
+    let fine = [
+        "elongated_body",
+        "raised_body",
+        "stretched_legs",
+        "raised_legs",
+    ];
+    let posture_unknown = fine.iter().any(|n| match cell(n) {
+        Some(c) => c.is_empty(),
+        None => lying,
+    });
+    Labels {
+        sitting: flag("sitting"),
+        backrest: flag("backrest"),
+        armrest: flag("armrest"),
+        headrest: flag("headrest"),
+        lying,
+        elongated_body: flag("elongated_body"),
+        raised_body: flag("raised_body"),
+        stretched_legs: flag("stretched_legs"),
+        raised_legs: flag("raised_legs"),
+        posture_unknown,
+    }
+}
+
+/// The header and the records of a CSV file.
+fn read_csv(path: &Path) -> Result<(csv::StringRecord, Vec<csv::StringRecord>), SynthError> {
+    let lerr = |e: csv::Error| SynthError::Labels {
+        path: path.to_path_buf(),
+        what: e.to_string(),
+    };
+    let text = std::fs::read_to_string(path).map_err(io_err(path))?;
+    let mut rd = csv::Reader::from_reader(text.as_bytes());
+    let headers = rd.headers().map_err(lerr)?.clone();
+    let records = rd.records().collect::<Result<Vec<_>, _>>().map_err(lerr)?;
+    Ok((headers, records))
+}
+
+/// Reads a `labels.csv` written by [`write_labels`] (columns found by name, so older files
+/// without the fine-grained lying columns read too, see [`labels_of`]).
+pub fn read_labels(path: &Path) -> Result<Vec<LabelRow>, SynthError> {
+    let lerr = |what: String| SynthError::Labels {
+        path: path.to_path_buf(),
+        what,
+    };
+    let (headers, records) = read_csv(path)?;
+    let col = |n: &str| headers.iter().position(|h| h.trim() == n);
+    let mut rows = Vec::new();
+    for rec in records {
+        let get = |n: &str| col(n).and_then(|c| rec.get(c)).map(str::trim);
+        let text = |n: &str| get(n).unwrap_or("").to_string();
+        rows.push(LabelRow {
+            file: text("file"),
+            labels: labels_of(&headers, &rec),
+            kind: text("kind"),
+            class: text("class"),
+            doubtful: Some(text("doubtful")).filter(|s| !s.is_empty()),
+            points: text("points")
+                .parse()
+                .map_err(|_| lerr(format!("bad 'points' cell for {}", text("file"))))?,
+        });
+    }
+    Ok(rows)
+}
+
 /// Turns a labels file of meshes (like `real-models/labels.csv`: `file` relative to the
 /// CSV, affordance columns, `class`, `doubtful`) into a dataset of depth views in
 /// `out_dir`: `views_per_model` views per mesh (see [`render_mesh_views`]) and a
@@ -1341,24 +1584,14 @@ pub fn views_of_labelled_models(
         path: labels_csv.to_path_buf(),
         what,
     };
-    let text = std::fs::read_to_string(labels_csv).map_err(io_err(labels_csv))?;
-    let mut rd = csv::Reader::from_reader(text.as_bytes());
-    let headers = rd.headers().map_err(|e| lerr(e.to_string()))?.clone();
+    let (headers, records) = read_csv(labels_csv)?;
     let col = |n: &str| headers.iter().position(|h| h.trim() == n);
     let fcol = col("file").ok_or_else(|| lerr("no 'file' column".into()))?;
     let base = labels_csv.parent().unwrap_or(Path::new("."));
     let mut rows = Vec::new();
-    for (i, rec) in rd.records().enumerate() {
-        let rec = rec.map_err(|e| lerr(e.to_string()))?;
+    for (i, rec) in records.iter().enumerate() {
         let get = |n: &str| col(n).and_then(|c| rec.get(c)).map(str::trim).unwrap_or("");
-        let flag = |n: &str| get(n) == "1";
-        let labels = Labels {
-            sitting: flag("sitting"),
-            backrest: flag("backrest"),
-            armrest: flag("armrest"),
-            headrest: flag("headrest"),
-            lying: flag("lying"),
-        };
+        let labels = labels_of(&headers, rec);
         let file = rec.get(fcol).unwrap_or("").trim();
         let paths = render_mesh_views(
             &base.join(file),
@@ -1480,6 +1713,247 @@ mod tests {
     }
 
     #[test]
+    fn recliners_follow_the_rules() {
+        let (mut lying, mut chairs, mut raised_legs, mut arms) = (0, 0, 0, 0);
+        for seed in 0..80 {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let o = make_object(Class::Recliner, &mut rng);
+            // The same seed gives the same recliner.
+            let again = obj(Class::Recliner, seed);
+            assert_eq!(o.mesh.vertices, again.mesh.vertices);
+            assert_eq!(o.labels, again.labels);
+            let l = o.labels;
+            assert!(
+                l.sitting && l.backrest && !l.headrest && !l.posture_unknown,
+                "{l:?}"
+            );
+            // The seat top (over the origin) at the focus height.
+            let seat = o.focus_height;
+            assert!((0.40..=0.48 + 1e-9).contains(&seat), "{seat}");
+            let over_origin = |part: Part| {
+                (0..o.mesh.len())
+                    .filter(|&i| o.mesh.parts[i] == part)
+                    .flat_map(|i| o.mesh.triangle(i))
+                    .any(|p| (p.z - seat).abs() < 1e-9 && p.x.abs() < 0.3)
+            };
+            assert!(over_origin(if l.lying {
+                Part::LyingSurface
+            } else {
+                Part::Seat
+            }));
+            // The back top rises 0.7–0.9 m · sin 30–50° above the seat.
+            let rise = top_of(&o.mesh, Part::Backrest).unwrap() - seat;
+            assert!((0.35 - 1e-9..=0.69).contains(&rise), "{rise}");
+            if let Some(arm) = top_of(&o.mesh, Part::Armrest) {
+                arms += 1;
+                assert_eq!(l.armrest, (0.12..=0.35).contains(&(arm - seat)), "{seed}");
+            } else {
+                assert!(!l.armrest);
+            }
+            // Lying iff the leg rest is out (then it is a lying surface in front of the
+            // seat, and seat + back + leg rest ≥ 1.5 m); the body is raised, the legs
+            // stretched or raised by the leg rest's angle.
+            let front = o.mesh.bounds().unwrap().1.x;
+            assert_eq!(l.lying, front > 0.5, "{seed}: {front}");
+            if l.lying {
+                lying += 1;
+                assert!(!o.mesh.parts.contains(&Part::Seat));
+                assert!(l.raised_body && !l.elongated_body);
+                assert!(l.stretched_legs != l.raised_legs);
+                // The leg rest's far end is higher than the seat by len · sin(angle).
+                let top = top_of(&o.mesh, Part::LyingSurface).unwrap() - seat;
+                let len = front - 0.275; // at most: half a 0.55 m seat
+                let sin = (top / len).clamp(-1.0, 1.0);
+                if l.stretched_legs {
+                    assert!(
+                        top <= 0.8 * 15f64.to_radians().sin() + 1e-9,
+                        "{seed}: {top}"
+                    );
+                } else {
+                    raised_legs += 1;
+                    assert!(sin >= 15f64.to_radians().sin() * 0.9, "{seed}: {top} {len}");
+                }
+            } else {
+                chairs += 1;
+                assert!(o.mesh.parts.contains(&Part::Seat));
+                assert!(!o.mesh.parts.contains(&Part::LyingSurface));
+                assert!(!(l.elongated_body || l.raised_body || l.stretched_legs || l.raised_legs));
+            }
+        }
+        // Both kinds, both leg postures and arms occur.
+        assert!(lying >= 30 && chairs >= 15 && raised_legs >= 5 && arms >= 20);
+        assert!(lying - raised_legs >= 10);
+    }
+
+    #[test]
+    fn recliner_rule_is_the_length_along_the_surfaces() {
+        let p = ReclinerParams {
+            back_length: 0.7,
+            seat_depth: 0.45,
+            leg_rest_length: 0.5,
+            back_angle_deg: 30.0,
+            leg_rest_angle_deg: 20.0,
+            ..ReclinerParams::default()
+        };
+        let l = recliner_labels(&p);
+        assert!(l.lying && l.raised_body && l.raised_legs && !l.stretched_legs);
+        // Folded, or too short: a chair.
+        for q in [
+            ReclinerParams {
+                leg_rest_folded: true,
+                ..p
+            },
+            ReclinerParams {
+                leg_rest_length: 0.3,
+                ..p
+            },
+            ReclinerParams {
+                back_angle_deg: 75.0,
+                ..p
+            },
+        ] {
+            let l = recliner_labels(&q);
+            assert!(
+                l.sitting && !l.lying && !l.raised_body && !l.raised_legs,
+                "{q:?}"
+            );
+        }
+        // A back below 25° is an elongated body; a level leg rest stretched legs.
+        let l = recliner_labels(&ReclinerParams {
+            back_angle_deg: 20.0,
+            leg_rest_angle_deg: 0.0,
+            ..p
+        });
+        assert!(l.elongated_body && !l.raised_body && l.stretched_legs && !l.raised_legs);
+        // Headrest and arms by height.
+        let l = recliner_labels(&ReclinerParams {
+            back_length: 0.9,
+            back_angle_deg: 60.0,
+            arms: true,
+            arm_height_above_seat: 0.36,
+            ..p
+        });
+        assert!(l.headrest && !l.armrest && l.raised_body);
+    }
+
+    #[test]
+    fn fine_lying_labels_of_beds_benches_and_sofas() {
+        for seed in 0..40 {
+            let b = obj(Class::Bed, seed).labels;
+            assert!(b.elongated_body && b.stretched_legs && !b.raised_body && !b.raised_legs);
+            assert!(!b.posture_unknown);
+            for class in [
+                Class::Sofa,
+                Class::Bench,
+                Class::BenchWithBack,
+                Class::Armchair,
+            ] {
+                let l = obj(class, seed).labels;
+                let any = l.elongated_body || l.raised_body || l.stretched_legs || l.raised_legs;
+                if !l.lying {
+                    assert!(!any && !l.posture_unknown, "{class:?} {seed}");
+                } else if l.posture_unknown {
+                    assert_eq!(class, Class::Sofa);
+                    assert!(!any);
+                    assert_eq!(l.posture_cells(), [""; 4]);
+                } else {
+                    assert!(l.elongated_body && l.stretched_legs && !l.raised_body);
+                    assert_eq!(l.posture_cells(), ["1", "0", "1", "0"]);
+                }
+            }
+        }
+        // Sofas: flat at 1.6 m between the arms and longer, undecided below.
+        let (mut flat, mut unknown) = (0, 0);
+        for seed in 0..200 {
+            let l = obj(Class::Sofa, seed).labels;
+            flat += usize::from(l.lying && l.elongated_body);
+            unknown += usize::from(l.posture_unknown);
+        }
+        assert!(flat > 10 && unknown > 10, "{flat} {unknown}");
+    }
+
+    #[test]
+    fn fine_lying_labels_or_over_a_room() {
+        let bed = Labels {
+            sitting: true,
+            lying: true,
+            ..Labels::default()
+        }
+        .with_posture(0.0, 0.0);
+        let short_sofa = Labels {
+            sitting: true,
+            lying: true,
+            posture_unknown: true,
+            ..Labels::default()
+        };
+        let recl = Labels {
+            lying: true,
+            ..Labels::default()
+        }
+        .with_posture(40.0, 20.0);
+        assert_eq!(bed.or(short_sofa).posture_cells(), ["1", "", "1", ""]);
+        assert_eq!(bed.or(recl).posture_cells(), ["1", "1", "1", "1"]);
+        assert_eq!(
+            Labels::default().or(recl).posture_cells(),
+            ["0", "1", "0", "1"]
+        );
+        assert_eq!(Labels::default().posture_cells(), ["0"; 4]);
+    }
+
+    #[test]
+    fn labels_read_back_with_and_without_fine_columns() {
+        let d = tempfile::tempdir().unwrap();
+        let row = |file: &str, labels: Labels| LabelRow {
+            file: file.into(),
+            labels,
+            kind: "room".into(),
+            class: "bed+sofa".into(),
+            doubtful: None,
+            points: 7,
+        };
+        let rows = vec![
+            row(
+                "a.ply",
+                Labels {
+                    lying: true,
+                    posture_unknown: true,
+                    ..Labels::default()
+                }
+                .or(Labels {
+                    lying: true,
+                    ..Labels::default()
+                }
+                .with_posture(0.0, 20.0)),
+            ),
+            row("b.ply", Labels::default()),
+        ];
+        let path = d.path().join("labels.csv");
+        write_labels(&path, &rows).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            text.contains("a.ply,0,0,0,0,1,room,bed+sofa,,7,1,,,1\n"),
+            "{text}"
+        );
+        assert!(
+            text.contains("b.ply,0,0,0,0,0,room,bed+sofa,,7,0,0,0,0\n"),
+            "{text}"
+        );
+        assert_eq!(read_labels(&path).unwrap(), rows);
+        // An older file without the fine columns: undecided where lying, 0 elsewhere.
+        std::fs::write(
+            &path,
+            "file,sitting,backrest,armrest,headrest,lying,kind,class,doubtful,points\n\
+             a.ply,1,0,0,0,1,full,bed,,5\nb.ply,1,1,0,0,0,full,chair,,6\n",
+        )
+        .unwrap();
+        let back = read_labels(&path).unwrap();
+        assert_eq!(back[0].labels.posture_cells(), [""; 4]);
+        assert!(back[0].labels.lying && back[0].labels.sitting);
+        assert_eq!(back[1].labels.posture_cells(), ["0"; 4]);
+        assert_eq!(back[1].points, 6);
+    }
+
+    #[test]
     fn a_stool_against_a_wall_gets_a_backrest_and_is_seen() {
         let spec = DatasetSpec::default();
         let s = one_scene(SceneKind::Wall, Class::Stool, 5, &spec);
@@ -1529,6 +2003,12 @@ mod tests {
         assert!(
             text.starts_with("file,sitting,backrest,armrest,headrest,lying,kind,class,doubtful")
         );
+        assert_eq!(
+            text.lines().next().unwrap(),
+            "file,sitting,backrest,armrest,headrest,lying,kind,class,doubtful,points,\
+             elongated_body,raised_body,stretched_legs,raised_legs"
+        );
+        assert_eq!(read_labels(&a.labels_csv).unwrap(), a.rows);
         assert_eq!(text.lines().count(), 7);
         assert_eq!(text, std::fs::read_to_string(&b.labels_csv).unwrap());
     }
