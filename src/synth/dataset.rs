@@ -932,7 +932,9 @@ pub fn recliner_labels(p: &ReclinerParams) -> Labels {
         && p.back_angle_deg <= TRUNK_RAISED_DEG.1;
     let labels = Labels {
         sitting: (0.25..=0.55).contains(&p.seat_height),
-        backrest: p.back_rise() >= 0.25,
+        // A back reclined further than BACKREST_MAX_RECLINE_DEG from upright is for lying,
+        // not a backrest to sit against (README, Conventions).
+        backrest: p.back_rise() >= 0.25 && 90.0 - p.back_angle_deg <= BACKREST_MAX_RECLINE_DEG,
         armrest: p.arms && (0.12..=0.35).contains(&p.arm_height_above_seat),
         headrest: p.back_rise() >= 0.70,
         lying,
@@ -1124,6 +1126,10 @@ pub const LYING_MIN_SOFA_LENGTH: f64 = 1.0;
 /// head to the ankles of the 1.75 m adult; the feet may overhang. A recliner with its leg
 /// rest folded (0.70–0.90 m back + 0.45–0.55 m seat) is a chair.
 pub const LYING_MIN_RECLINER_LENGTH: f64 = 1.5;
+
+/// Furthest a back may recline from upright (degrees) and still be a backrest for sitting:
+/// the sitting hierarchy's backrest sweep ends there ("beyond 35 deg it is lying").
+pub const BACKREST_MAX_RECLINE_DEG: f64 = 35.0;
 
 /// Least visible area of a seat or lying surface (m^2) for its labels to count in a view:
 /// about a 0.22 m square, under which the torso template (0.30 m across at 1.75 m)
@@ -1723,8 +1729,10 @@ mod tests {
             assert_eq!(o.mesh.vertices, again.mesh.vertices);
             assert_eq!(o.labels, again.labels);
             let l = o.labels;
+            // Backs at 30-50 deg above level recline 40-60 deg from upright: lying, not a
+            // backrest to sit against.
             assert!(
-                l.sitting && l.backrest && !l.headrest && !l.posture_unknown,
+                l.sitting && !l.backrest && !l.headrest && !l.posture_unknown,
                 "{l:?}"
             );
             // The seat top (over the origin) at the focus height.
