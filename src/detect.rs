@@ -167,10 +167,19 @@ pub fn detect(cloud: &PointCloud, agent: &Agent, h: &Hierarchy, cfg: &DetectConf
 /// Runs the method on `cloud` for every model of a set (each body with each hierarchy),
 /// building the height map and the voxelised scene once for all of them.
 pub fn detect_all(cloud: &PointCloud, models: &[Model], cfg: &DetectConfig) -> Vec<Outcome> {
-    let prepared = prepare(cloud, cfg);
+    detect_all_prepared(cloud, &prepare(cloud, cfg), models, cfg)
+}
+
+/// [`detect_all`] on a scene already prepared (the caller also draws its height map).
+pub fn detect_all_prepared(
+    cloud: &PointCloud,
+    prepared: &Prepared,
+    models: &[Model],
+    cfg: &DetectConfig,
+) -> Vec<Outcome> {
     models
         .iter()
-        .map(|m| detect_prepared(cloud, &prepared, &m.agent, &m.hierarchy, cfg))
+        .map(|m| detect_prepared(cloud, prepared, &m.agent, &m.hierarchy, cfg))
         .collect()
 }
 

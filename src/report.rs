@@ -17,8 +17,6 @@ use crate::model_set::Model;
 pub struct FileReport {
     /// The file as named on the command line (or relative to a labels file).
     pub file: String,
-    /// Points of the cloud.
-    pub points: usize,
     /// Points dropped for non-finite coordinates.
     pub dropped_non_finite: usize,
     /// Affordance ids of every hierarchy run, each once, in hierarchy and node order.
@@ -73,7 +71,6 @@ impl FileReport {
         }
         FileReport {
             file,
-            points,
             dropped_non_finite,
             ids: crate::model_set::ids(models),
             runs,
@@ -91,6 +88,11 @@ impl FileReport {
             }
         }
         out
+    }
+
+    /// Points of the cloud (one label each).
+    pub fn points(&self) -> usize {
+        self.labels.len()
     }
 
     /// Hypotheses over every run.
@@ -150,7 +152,7 @@ struct JsonFile<'a> {
 fn json_file(r: &FileReport) -> JsonFile<'_> {
     JsonFile {
         file: &r.file,
-        points: r.points,
+        points: r.points(),
         dropped_non_finite: r.dropped_non_finite,
         affordances: affords(r, None).into_iter().map(String::as_str).collect(),
         runs: r
@@ -314,7 +316,7 @@ pub fn to_table(r: &FileReport) -> String {
     let mut s = format!(
         "{}: {} points, {} hypotheses, {} detections; affords: {}\n",
         r.file,
-        r.points,
+        r.points(),
         r.hypotheses(),
         r.detections.len(),
         match affords(r, None) {

@@ -11,7 +11,7 @@ use crate::detect::{detect_all, DetectConfig};
 use crate::hierarchy::Hierarchy;
 use crate::input::{load_input, Input, InputOptions};
 use crate::model::ModelError;
-use crate::model_set::{load_set, sources, Model, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
+use crate::model_set::{load_set, sources, Model, Source, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
 use crate::report::{self, FileReport};
 
 /// Which models a command runs: bodies (agents at heights) and hierarchies, each named by
@@ -30,11 +30,17 @@ pub struct ModelChoice {
 pub const DEFAULT_HEIGHT: f64 = 1.75;
 
 impl ModelChoice {
-    /// Resolves the names and loads every body with every hierarchy.
-    pub fn load(&self) -> Result<Vec<Model>, ModelError> {
+    /// Resolves the agent and hierarchy names to their sources, with the defaults.
+    pub fn sources(&self) -> Result<(Vec<Source>, Vec<Source>), ModelError> {
         let agents = sources(&self.agents, BUILTIN_AGENTS, &["human"])?;
         let names: Vec<&str> = BUILTIN_HIERARCHIES.iter().map(|(n, _)| *n).collect();
         let hierarchies = sources(&self.hierarchies, BUILTIN_HIERARCHIES, &names)?;
+        Ok((agents, hierarchies))
+    }
+
+    /// Resolves the names and loads every body with every hierarchy.
+    pub fn load(&self) -> Result<Vec<Model>, ModelError> {
+        let (agents, hierarchies) = self.sources()?;
         let heights = if self.heights.is_empty() {
             vec![DEFAULT_HEIGHT]
         } else {
@@ -242,7 +248,7 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
                 Status::Error
             };
             if let Some(r) = done.report {
-                line.points = Some(r.points);
+                line.points = Some(r.points());
                 line.detections = Some(r.detections.len());
                 line.affordances = Some(report::affords(&r, None).into_iter().cloned().collect());
                 reports.push(r);
@@ -424,18 +430,8 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
             )
         })
         .unwrap_or_default();
-    let outcomes: Vec<crate::detect::Outcome> = models
-        .iter()
-        .map(|m| {
-            crate::detect::detect_prepared(
-                &loaded.cloud,
-                &prepared,
-                &m.agent,
-                &m.hierarchy,
-                &req.config,
-            )
-        })
-        .collect();
+    let outcomes =
+        crate::detect::detect_all_prepared(&loaded.cloud, &prepared, &models, &req.config);
     let stats = outcomes.first().map(|o| o.stats).unwrap_or_default();
     let r = FileReport::new(
         req.file.display().to_string(),
@@ -579,17 +575,12 @@ pub struct EvalRequest {
 /// Runs `afford eval`: prints the markdown table; returns the exit code (2 on error or
 /// when a file could not be read).
 pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
-    let sources = (|| {
-        let agents = sources(
-            &req.agent.iter().cloned().collect::<Vec<_>>(),
-            BUILTIN_AGENTS,
-            &["human"],
-        )?;
-        let names: Vec<&str> = BUILTIN_HIERARCHIES.iter().map(|(n, _)| *n).collect();
-        let hierarchies = sources(&req.affordances, BUILTIN_HIERARCHIES, &names)?;
-        Ok::<_, ModelError>((agents, hierarchies))
-    })();
-    let (agents, hierarchies) = match sources {
+    let choice = ModelChoice {
+        agents: req.agent.iter().cloned().collect(),
+        hierarchies: req.affordances.clone(),
+        heights: req.heights.clone(),
+    };
+    let (agents, hierarchies) = match choice.sources() {
         Ok(s) => s,
         Err(e) => {
             let _ = writeln!(err, "error: {e}");

@@ -236,10 +236,11 @@ impl Scene {
         let mut q = *p;
         // March down by the clearance bound (never less than half a voxel).
         while p.z - q.z <= max.min(floor) {
-            if self.point_clearance(&q) <= self.voxel / 2.0 {
+            let clearance = self.point_clearance(&q);
+            if clearance <= self.voxel / 2.0 {
                 return p.z - q.z;
             }
-            q.z -= self.point_clearance(&q).max(self.voxel / 2.0);
+            q.z -= clearance;
         }
         if floor <= max {
             floor
