@@ -12,6 +12,7 @@
 pub mod agent;
 pub mod agent_mesh;
 pub mod batch;
+pub mod cli;
 pub mod cloud;
 pub mod detect;
 pub mod eval;
