@@ -19,8 +19,13 @@ use rand_chacha::ChaCha8Rng;
 use super::PointCloud;
 
 /// Largest angle (degrees) between a floor candidate's normal and the assumed up (+z after
-/// the up rotation).
+/// the up rotation), for scans whose up axis is known: a levelled scanner or a model.
 pub const FLOOR_MAX_TILT_DEG: f64 = 25.0;
+/// Largest angle (degrees) between a floor candidate's normal and the camera's up (-y) in a
+/// camera frame: depth cameras look 10-55 deg down at furniture (a camera 1.5 m high aimed
+/// at a chair 2 m away looks ~30 deg down); 75 deg leaves room for roll. Walls and ceilings
+/// are told apart by the camera's side of the plane, not by the angle (see [`to_world`]).
+pub const FLOOR_MAX_TILT_CAMERA_DEG: f64 = 75.0;
 /// Distance (metres) within which a point counts as on a floor candidate plane.
 pub const FLOOR_INLIER_M: f64 = 0.02;
 /// A point more than this (metres) under a plane counts as below it.
@@ -316,7 +321,10 @@ pub enum FrameError {
 /// the floor levelling (see the module documentation). Point order is kept.
 ///
 /// The floor is the lowest large plane whose normal is within [`FLOOR_MAX_TILT_DEG`] of
-/// the assumed up: up to six such planes are extracted by RANSAC (seeded, so the result
+/// the assumed up (in a camera frame: within [`FLOOR_MAX_TILT_CAMERA_DEG`] of the camera's
+/// up, and with the camera above the plane: a camera sees the floor from above, while a
+/// wall in front of a camera looking down, or a ceiling, has the camera on its other
+/// side, so no pitch makes them floors): up to six such planes are extracted by RANSAC (seeded, so the result
 /// depends only on the input), and among those with at least a tenth of the largest
 /// one's points, the one with the fewest points under it wins, so a big table top or a
 /// ceiling does not beat the floor. The plane is refined by least squares on the points
@@ -345,7 +353,12 @@ pub fn to_world(
     apply(&total, &mut points);
     let mut floor = None;
     if opts.floor == FloorMode::Auto {
-        let fit = find_floor(&points)?;
+        // The sensor's position in the turned frame: the input origin, for a camera frame.
+        let sensor = opts
+            .camera
+            .then(|| Point3::from_homogeneous(total * Point3::origin().to_homogeneous()))
+            .flatten();
+        let fit = find_floor(&points, sensor.as_ref())?;
         let q = UnitQuaternion::rotation_between(&fit.normal, &Vector3::z())
             .unwrap_or_else(UnitQuaternion::identity);
         let mut level = q.to_homogeneous();
@@ -467,8 +480,19 @@ fn refine(plane: Plane, set: &[Point3<f64>]) -> Plane {
     plane
 }
 
-/// Finds the floor in `points` (already turned so that the assumed up is +z).
-fn find_floor(points: &[Point3<f64>]) -> Result<FloorFit, FrameError> {
+/// Finds the floor in `points` (already turned so that the assumed up is +z). With a
+/// `sensor` position (a camera frame), the tilt allowed is [`FLOOR_MAX_TILT_CAMERA_DEG`]
+/// and only planes with the sensor above them are floors.
+fn find_floor(
+    points: &[Point3<f64>],
+    sensor: Option<&Point3<f64>>,
+) -> Result<FloorFit, FrameError> {
+    let max_tilt = if sensor.is_some() {
+        FLOOR_MAX_TILT_CAMERA_DEG
+    } else {
+        FLOOR_MAX_TILT_DEG
+    };
+    let faces_sensor = |plane: &Plane| sensor.is_none_or(|s| plane.dist(s) > 0.0);
     let finite: Vec<Point3<f64>> = points
         .iter()
         .filter(|p| p.coords.iter().all(|c| c.is_finite()))
@@ -482,7 +506,7 @@ fn find_floor(points: &[Point3<f64>]) -> Result<FloorFit, FrameError> {
     }
     let stride = finite.len().div_ceil(WORK_POINTS);
     let work: Vec<Point3<f64>> = finite.iter().step_by(stride).copied().collect();
-    let min_cos = FLOOR_MAX_TILT_DEG.to_radians().cos();
+    let min_cos = max_tilt.to_radians().cos();
     let min_points = ((work.len() as f64 * 0.02) as usize).max(10);
     let mut rng = ChaCha8Rng::seed_from_u64(SEED);
     let mut remaining: Vec<Point3<f64>> = work.clone();
@@ -503,6 +527,7 @@ fn find_floor(points: &[Point3<f64>]) -> Result<FloorFit, FrameError> {
                 continue;
             }
             let Some(plane) = Plane::through(&remaining[i], &remaining[j], &remaining[k], min_cos)
+                .filter(|p| faces_sensor(p))
             else {
                 continue;
             };
@@ -516,7 +541,7 @@ fn find_floor(points: &[Point3<f64>]) -> Result<FloorFit, FrameError> {
         }
         let Some((plane, _)) = best else { break };
         let plane = refine(plane, &remaining);
-        if plane.n.z < min_cos {
+        if plane.n.z < min_cos || !faces_sensor(&plane) {
             break;
         }
         let inliers = work
@@ -532,7 +557,7 @@ fn find_floor(points: &[Point3<f64>]) -> Result<FloorFit, FrameError> {
     let largest = planes.iter().map(|(_, c)| *c).max().unwrap_or(0);
     if largest == 0 {
         return Err(FrameError::NoFloor(format!(
-            "no plane within {FLOOR_MAX_TILT_DEG} deg of the assumed up holds 2% of the points \
+            "no plane within {max_tilt} deg of the assumed up holds 2% of the points \
              (is the up axis right?)"
         )));
     }
@@ -874,6 +899,20 @@ mod tests {
 
     #[test]
     fn camera_view_of_a_floor_comes_back_level() {
+        camera_view_comes_back_level(22.0);
+    }
+
+    /// Issue 11: a camera 1.5 m high aimed at furniture 2 m away looks ~30-40 deg down;
+    /// a floor search limited to 25 deg of the camera's up found no floor there, and the
+    /// wall in front of a camera looking down is as steep to it as the floor.
+    #[test]
+    fn pitched_camera_views_come_back_level() {
+        for pitch in [35.0, 45.0, 55.0] {
+            camera_view_comes_back_level(pitch);
+        }
+    }
+
+    fn camera_view_comes_back_level(pitch_deg: f64) {
         // World: floor 5 m x 6 m, a box 0.5 x 0.4 x 0.45 m on it, a wall at y = 6.
         let mut floor = rect(-2.5, 2.5, 0.5, 6.0, 0.0, 0.04);
         jitter(&mut floor, 0.003);
@@ -887,9 +926,13 @@ mod tests {
             }
         }
         let world: Vec<Point3<f64>> = floor.iter().chain(&boxp).chain(&wall).copied().collect();
-        // Camera 1.5 m above the floor looking along +y, pitched 22 deg down, rolled 4 deg,
-        // yawed 10 deg. Columns of r_wc: the camera's x (right), y (down), z (forward).
-        let (pitch, roll, yaw) = (22f64.to_radians(), 4f64.to_radians(), 10f64.to_radians());
+        // Camera 1.5 m above the floor looking along +y, pitched `pitch_deg` down, rolled 4
+        // deg, yawed 10 deg. Columns of r_wc: the camera's x (right), y (down), z (forward).
+        let (pitch, roll, yaw) = (
+            pitch_deg.to_radians(),
+            4f64.to_radians(),
+            10f64.to_radians(),
+        );
         let level = Matrix3::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -1.0, 0.0);
         let r_wc = Rotation3::from_axis_angle(&Vector3::z_axis(), yaw)
             * Rotation3::from_axis_angle(&Vector3::x_axis(), -pitch)
@@ -912,7 +955,7 @@ mod tests {
         let (out, rep) = to_world(PointCloud::new(cam), &opts).unwrap();
         let fl = rep.floor.as_ref().unwrap();
         assert!((fl.offset_m + 1.5).abs() < 0.01, "{rep}");
-        assert!(fl.rotation_deg > 15.0 && fl.rotation_deg < 30.0, "{rep}");
+        assert!((fl.rotation_deg - pitch_deg).abs() < 6.0, "{rep}");
         let worst_floor = out.points[..nf]
             .iter()
             .map(|p| p.z.abs())
