@@ -34,7 +34,7 @@ fn stages(c: &mut Criterion) {
     g.sample_size(10);
     g.bench_function("load_ply", |b| b.iter(|| cloud::load(sample).unwrap()));
     g.bench_function("heightmap", |b| {
-        b.iter(|| HeightMap::from_cloud(&cloud, cfg.heightmap_cell))
+        b.iter(|| HeightMap::from_cloud(&cloud, &cfg.heightmap))
     });
     let prepared = prepare(&cloud, &cfg);
     g.bench_function("hypotheses", |b| {

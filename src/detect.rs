@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use crate::agent::{Agent, Cylinder};
 use crate::cloud::PointCloud;
 use crate::fit::{fit, ContactConfig, Fit};
-use crate::heightmap::HeightMap;
+use crate::heightmap::{HeightMap, HeightMapConfig};
 use crate::hierarchy::Hierarchy;
 use crate::hypotheses::{hypotheses, Hypothesis};
 use crate::model_set::Model;
@@ -18,8 +18,8 @@ use crate::unfold::{unfold, Unfolded};
 /// The scene-level numbers of a run (not per hierarchy). Defaults carry their reasons.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DetectConfig {
-    /// Height-map cell, metres.
-    pub heightmap_cell: f64,
+    /// The height map (section 4.1).
+    pub heightmap: HeightMapConfig,
     /// Voxelisation of the scene.
     pub scene: SceneConfig,
     /// Contact location.
@@ -31,8 +31,7 @@ pub struct DetectConfig {
 impl Default for DetectConfig {
     fn default() -> Self {
         DetectConfig {
-            // Paper, section 4.1: 0.05 m balanced precision and time.
-            heightmap_cell: 0.05,
+            heightmap: HeightMapConfig::default(),
             scene: SceneConfig {
                 // Issue 2: at most 0.02 m; finer than the 3-4 cm radius of the thinnest limb.
                 voxel_size: 0.02,
@@ -127,7 +126,7 @@ pub struct Prepared {
 /// Builds the height map and the voxelised scene once for a cloud.
 pub fn prepare(cloud: &PointCloud, cfg: &DetectConfig) -> Prepared {
     Prepared {
-        map: HeightMap::from_cloud(cloud, cfg.heightmap_cell),
+        map: HeightMap::from_cloud(cloud, &cfg.heightmap),
         scene: Scene::new(cloud, &cfg.scene),
     }
 }

@@ -1,7 +1,52 @@
-//! The height map of section 4.1: the scene seen from above in square cells, each holding
-//! the height of its highest point; cells without points are invalid.
+//! The height map of section 4.1: the scene seen from above in square cells. The paper
+//! keeps the highest point of each cell; here a cell keeps the top of the lowest stack of
+//! points standing on the floor, so that ceilings, table tops, shelves and upper bunks
+//! (anything with a tall free gap beneath it) do not hide the seats and beds under them,
+//! and each point counts in the cells within a point spacing of it, so that surfaces
+//! sampled more sparsely than the cells (reconstructions read as vertices, subsampled
+//! clouds) have no empty cells. Cells where nothing is
+//! seen stay invalid.
 
-use crate::cloud::PointCloud;
+use crate::cloud::{point_spacing, PointCloud};
+
+/// How the height map is built. Defaults carry their reasons.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeightMapConfig {
+    /// Cell edge length, metres.
+    pub cell: f64,
+    /// A vertical gap at least this tall (metres) under a layer of points makes that layer
+    /// a roof over what is below (a ceiling, an upper bunk, a high shelf), not part of the
+    /// furniture the body uses; the floor, z = 0, counts as the lowest layer.
+    pub overhang_gap: f64,
+    /// Each point stands for the surface within this many point spacings (the cloud's
+    /// median nearest-neighbour distance) of it: it counts in every cell whose centre lies
+    /// that close, so a surface sampled more sparsely than the cells has no empty cells.
+    pub sample_reach: f64,
+    /// The most a point may stand for, metres, however sparse the cloud.
+    pub max_reach: f64,
+}
+
+impl Default for HeightMapConfig {
+    fn default() -> Self {
+        HeightMapConfig {
+            // Paper, section 4.1: 0.05 m balanced precision and time.
+            cell: 0.05,
+            // 0.85 m: the sitting height of a 1.65 m adult (0.52 H): under less free space
+            // nobody sits upright, so what covers a surface that closely (a table top over a
+            // seat, a bar stool's top over the floor) belongs to the furniture, as in the
+            // paper's map; ceilings, upper bunks and shelves above head height do not.
+            overhang_gap: 0.85,
+            // One spacing: every point of a surface sampled on a grid is within 0.71 spacings
+            // of a sample, so a cell centre farther than a spacing from every sample is off
+            // the surface or in a hole; edges grow by at most a spacing. Dense clouds
+            // (spacing under half a cell, 2.5 cm) count each point in its own cell only.
+            sample_reach: 1.0,
+            // 0.10 m: 20k-50k-point room views sample their surfaces every 5-10 cm; points
+            // farther apart than that do not describe a surface a body could rest on.
+            max_reach: 0.10,
+        }
+    }
+}
 
 /// A height map over the x-y plane (metres, z up).
 #[derive(Debug, Clone, PartialEq)]
@@ -16,14 +61,18 @@ pub struct HeightMap {
     pub nx: usize,
     /// Number of rows (along y).
     pub ny: usize,
-    /// Highest z per cell, row-major (`iy * nx + ix`); `None` where the cell is invalid.
+    /// Surface height per cell, row-major (`iy * nx + ix`); `None` where the cell is invalid.
     pub heights: Vec<Option<f64>>,
 }
 
 impl HeightMap {
-    /// Builds the height map of `cloud` with cells of `cell` metres (highest point per cell).
-    /// An empty cloud gives an empty map.
-    pub fn from_cloud(cloud: &PointCloud, cell: f64) -> HeightMap {
+    /// Builds the height map of `cloud` (world frame, metres, floor at z = 0) with cells
+    /// of `cfg.cell` metres: per cell, the top of the lowest stack of points, a stack
+    /// ending under a gap of at least `cfg.overhang_gap`; a cell whose lowest point floats
+    /// that far above the floor sees only a roof and is invalid. Each point counts in every
+    /// cell whose centre is within `cfg.sample_reach` point spacings of it. An empty cloud gives an empty map.
+    pub fn from_cloud(cloud: &PointCloud, cfg: &HeightMapConfig) -> HeightMap {
+        let cell = cfg.cell;
         let Some((lo, hi)) = cloud.bounds() else {
             return HeightMap {
                 x0: 0.0,
@@ -36,13 +85,62 @@ impl HeightMap {
         };
         let nx = ((hi.x - lo.x) / cell).floor() as usize + 1;
         let ny = ((hi.y - lo.y) / cell).floor() as usize + 1;
-        let mut heights: Vec<Option<f64>> = vec![None; nx * ny];
+        let reach = point_spacing(cloud).map_or(0.0, |s| (cfg.sample_reach * s).min(cfg.max_reach));
+        // Cell offsets a point may reach beyond its own cell (none for dense clouds).
+        let r = (reach / cell).ceil() as isize;
+        let cells_of = |x: f64, y: f64, out: &mut Vec<usize>| {
+            out.clear();
+            let fx = (x - lo.x) / cell;
+            let fy = (y - lo.y) / cell;
+            let ix = (fx as usize).min(nx - 1) as isize;
+            let iy = (fy as usize).min(ny - 1) as isize;
+            out.push(iy as usize * nx + ix as usize);
+            for dy in -r..=r {
+                for dx in -r..=r {
+                    let (jx, jy) = (ix + dx, iy + dy);
+                    if (dx, dy) == (0, 0)
+                        || jx < 0
+                        || jy < 0
+                        || jx >= nx as isize
+                        || jy >= ny as isize
+                    {
+                        continue;
+                    }
+                    let (cx, cy) = ((jx as f64 + 0.5 - fx) * cell, (jy as f64 + 0.5 - fy) * cell);
+                    if cx * cx + cy * cy <= reach * reach {
+                        out.push(jy as usize * nx + jx as usize);
+                    }
+                }
+            }
+        };
+        // The points' heights grouped by cell (counting sort), then sorted within a cell.
+        let mut start = vec![0usize; nx * ny + 1];
+        let mut cells = Vec::new();
         for p in &cloud.points {
-            let ix = (((p.x - lo.x) / cell) as usize).min(nx - 1);
-            let iy = (((p.y - lo.y) / cell) as usize).min(ny - 1);
-            let h = &mut heights[iy * nx + ix];
-            *h = Some(h.map_or(p.z, |z: f64| z.max(p.z)));
+            cells_of(p.x, p.y, &mut cells);
+            for &c in &cells {
+                start[c + 1] += 1;
+            }
         }
+        for i in 0..nx * ny {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut zs = vec![0.0f64; start[nx * ny]];
+        for p in &cloud.points {
+            cells_of(p.x, p.y, &mut cells);
+            for &c in &cells {
+                zs[fill[c]] = p.z;
+                fill[c] += 1;
+            }
+        }
+        let heights: Vec<Option<f64>> = (0..nx * ny)
+            .map(|c| {
+                let column = &mut zs[start[c]..start[c + 1]];
+                column.sort_unstable_by(f64::total_cmp);
+                stack_top(column, cfg.overhang_gap)
+            })
+            .collect();
         HeightMap {
             x0: lo.x,
             y0: lo.y,
@@ -85,6 +183,25 @@ impl HeightMap {
     }
 }
 
+/// The top of the lowest stack of the sorted heights `column` standing on the floor
+/// (z = 0): the stack ends below the first gap of at least `gap` metres. `None` for an
+/// empty column or one whose lowest point is `gap` or more above the floor (only a roof
+/// was seen there).
+fn stack_top(column: &[f64], gap: f64) -> Option<f64> {
+    let (&first, rest) = column.split_first()?;
+    if first >= gap {
+        return None;
+    }
+    let mut top = first;
+    for &z in rest {
+        if z - top >= gap {
+            break;
+        }
+        top = z;
+    }
+    Some(top)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -104,7 +221,7 @@ mod tests {
         }
         pts.push(Point3::new(0.175, 0.025, 0.0));
         pts.push(Point3::new(0.01, 0.099, 0.2));
-        let m = HeightMap::from_cloud(&PointCloud::new(pts), 0.05);
+        let m = HeightMap::from_cloud(&PointCloud::new(pts), &HeightMapConfig::default());
         assert_eq!((m.nx, m.ny), (4, 2));
         assert_eq!(m.get(0, 0), Some(0.45));
         assert_eq!(m.get(1, 1), Some(0.45));
@@ -115,9 +232,122 @@ mod tests {
         assert!((x - 0.185).abs() < 1e-9 && (y - 0.085).abs() < 1e-9);
     }
 
+    /// A square of points `step` apart over `[x0, x0 + side) x [y0, y0 + side)` at height `z`.
+    fn square(x0: f64, y0: f64, side: f64, step: f64, z: f64) -> Vec<Point3<f64>> {
+        let n = (side / step).round() as usize;
+        let mut pts = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                pts.push(Point3::new(
+                    x0 + (i as f64 + 0.5) * step,
+                    y0 + (j as f64 + 0.5) * step,
+                    z,
+                ));
+            }
+        }
+        pts
+    }
+
+    /// Issue 11: the highest point of every cell of a room scan is the ceiling, and a
+    /// shelf or an upper bunk hides what is under it; the paper's map then shows no seat.
+    #[test]
+    fn roofs_do_not_hide_what_is_under_them() {
+        let mut pts = square(0.0, 0.0, 2.0, 0.02, 0.0); // floor
+        pts.extend(square(0.5, 0.5, 0.5, 0.02, 0.45)); // seat
+        pts.extend(square(1.2, 0.5, 0.4, 0.02, 0.72)); // table top over floor
+        pts.extend(square(0.0, 0.0, 2.0, 0.02, 2.5)); // ceiling
+        pts.extend(square(1.0, 1.4, 0.3, 0.02, 1.6)); // floating shelf, nothing below but floor
+        pts.extend(square(0.2, 1.0, 0.3, 0.02, 0.5)); // a bed top ...
+        pts.extend(square(0.2, 1.0, 0.3, 0.02, 1.5)); // ... under an upper bunk
+        let m = HeightMap::from_cloud(&PointCloud::new(pts.clone()), &HeightMapConfig::default());
+        let at = |x: f64, y: f64| {
+            m.get(
+                ((x - m.x0) / m.cell) as isize,
+                ((y - m.y0) / m.cell) as isize,
+            )
+        };
+        assert_eq!(at(0.72, 0.72), Some(0.45), "seat under the ceiling");
+        assert_eq!(at(1.4, 0.7), Some(0.72), "no room to sit under a table top");
+        assert_eq!(at(1.1, 1.5), Some(0.0), "shelf");
+        assert_eq!(at(0.35, 1.15), Some(0.5), "bed under a bunk");
+        assert_eq!(at(0.2, 1.8), Some(0.0), "floor under the ceiling");
+        // A back rising from the seat is part of its stack: the cell shows its top.
+        let mut back = pts;
+        for k in 0..30 {
+            back.push(Point3::new(0.52, 0.7, 0.45 + 0.02 * k as f64));
+        }
+        let m = HeightMap::from_cloud(&PointCloud::new(back), &HeightMapConfig::default());
+        let top = m.get(
+            ((0.52 - m.x0) / m.cell) as isize,
+            ((0.7 - m.y0) / m.cell) as isize,
+        );
+        assert!((top.unwrap() - 1.03).abs() < 1e-9, "{top:?}");
+        // A cell where only a roof was seen (the floor under it hidden) is invalid.
+        let roof = square(0.0, 0.0, 0.5, 0.02, 1.2);
+        let m = HeightMap::from_cloud(&PointCloud::new(roof), &HeightMapConfig::default());
+        assert!(m.heights.iter().all(|h| h.is_none()));
+    }
+
+    /// Issue 11: a reconstruction read as mesh vertices samples a seat every ~4-8 cm, so
+    /// many 5 cm cells are empty and the discontinuity of the seat looks like a hole's.
+    #[test]
+    fn sampling_gaps_close_and_real_holes_stay() {
+        // A 1 m seat sampled on a 7 cm grid, with a 0.35 m hole in its middle.
+        let pts: Vec<Point3<f64>> = square(0.0, 0.0, 1.05, 0.07, 0.45)
+            .into_iter()
+            .filter(|p| !((0.35..0.70).contains(&p.x) && (0.35..0.70).contains(&p.y)))
+            .collect();
+        let cfg = HeightMapConfig::default();
+        let m = HeightMap::from_cloud(&PointCloud::new(pts.clone()), &cfg);
+        let valid = |m: &HeightMap, x0: usize, x1: usize| {
+            let mut n = 0;
+            for iy in x0..x1 {
+                for ix in x0..x1 {
+                    n += usize::from(m.get(ix as isize, iy as isize).is_some());
+                }
+            }
+            n
+        };
+        // The ring around the hole: every cell of the first 0.3 m (off the map's border)
+        // is seen or closed.
+        let ring = |m: &HeightMap| {
+            let mut n = 0;
+            for iy in 1..6 {
+                for ix in 1..19 {
+                    n += usize::from(m.get(ix, iy).is_some());
+                }
+            }
+            n
+        };
+        let missing: Vec<(usize, usize)> = (1..6)
+            .flat_map(|iy| (1..19).map(move |ix| (ix, iy)))
+            .filter(|&(ix, iy)| m.get(ix as isize, iy as isize).is_none())
+            .collect();
+        assert_eq!(ring(&m), 90, "{missing:?} nx {}", m.nx);
+        assert_eq!(valid(&m, 9, 12), 0, "the hole's middle stays a hole");
+        // Without closing, the 7 cm samples leave cells of the ring empty.
+        let none = HeightMapConfig {
+            sample_reach: 0.0,
+            ..cfg
+        };
+        let raw = HeightMap::from_cloud(&PointCloud::new(pts), &none);
+        assert!(ring(&raw) < 80, "{}", ring(&raw));
+    }
+
+    #[test]
+    fn stack_tops() {
+        assert_eq!(stack_top(&[], 0.85), None);
+        assert_eq!(stack_top(&[0.0, 0.2, 0.45], 0.85), Some(0.45));
+        assert_eq!(stack_top(&[0.0, 0.45, 1.2, 2.5], 0.85), Some(1.2));
+        assert_eq!(stack_top(&[0.0, 0.45, 1.3, 2.5], 0.85), Some(0.45));
+        assert_eq!(stack_top(&[0.9, 1.0], 0.85), None);
+        assert_eq!(stack_top(&[0.75], 0.85), Some(0.75));
+        assert_eq!(stack_top(&[-0.01, 0.9], 0.85), Some(-0.01));
+    }
+
     #[test]
     fn empty_cloud_gives_empty_map() {
-        let m = HeightMap::from_cloud(&PointCloud::default(), 0.05);
+        let m = HeightMap::from_cloud(&PointCloud::default(), &HeightMapConfig::default());
         assert_eq!(m.heights.len(), 0);
         assert_eq!(m.get(0, 0), None);
     }

@@ -10,6 +10,7 @@ pub mod frame;
 pub mod mesh;
 mod pcd;
 mod ply;
+pub mod spacing;
 mod xyz;
 
 pub use frame::{
@@ -20,6 +21,7 @@ pub use mesh::{read_mesh, sample_mesh};
 pub use pcd::{read_pcd, write_pcd};
 pub use ply::{read_ply, read_ply_property, write_ply_points};
 pub(crate) use ply::{write_ply_typed, Scalar};
+pub use spacing::point_spacing;
 pub use xyz::read_xyz;
 
 /// A point cloud in metres, z up (the environment P, section 3.1).
