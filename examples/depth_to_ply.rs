@@ -1,17 +1,17 @@
 //! Back-projects a 16-bit depth PNG (Kinect / RealSense / TUM / Redwood style) into a point
 //! cloud in the depth camera's frame (x right, y down, z forward, metres), written as binary
 //! PLY; `afford convert OUT.ply LEVELLED.ply --camera --floor auto` then puts it in the
-//! detector's frame. Used to rebuild the real-scan set (`tools/realset.sh`).
+//! detector's frame. Used to rebuild the real-scan set (`tools/realset.py`).
 //!
 //! ```sh
 //! cargo run --release --example depth_to_ply -- DEPTH.png OUT.ply \
-//!     --intrinsics 535.4,539.2,320.1,247.6 --scale 5000 [--stride 1] [--max-depth 6] \
+//!     --intrinsics 535.4,539.2,320.1,247.6 --scale 5000 [--stride 1] [--max-depth 8] \
 //!     [--preview DEPTH.preview.png]
 //! ```
 //!
 //! `--scale` is depth units per metre (TUM 5000, most others 1000); pixels with depth 0 (no
-//! reading) or beyond `--max-depth` metres are skipped. `--preview` writes the depth image
-//! shaded near-light / far-dark (no reading black) for labelling by eye.
+//! reading) or beyond `--max-depth` metres (default 8) are skipped. `--preview` writes the
+//! depth image shaded near-light / far-dark (no reading black) for labelling by eye.
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -76,7 +76,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args> {
     }
     let [depth, out]: [PathBuf; 2] = pos.try_into().map_err(|_| anyhow::anyhow!("{usage}"))?;
     let scale = scale.with_context(|| format!("--scale is required; {usage}"))?;
-    if !(scale.is_finite() && scale > 0.0) || stride == 0 || !(max_depth > 0.0) {
+    if !(scale.is_finite() && scale > 0.0 && max_depth > 0.0) || stride == 0 {
         bail!("--scale and --max-depth must be > 0, --stride >= 1");
     }
     Ok(Args {
