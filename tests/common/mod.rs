@@ -1,0 +1,75 @@
+//! The F-score gate shared by the regression tests: detection on a committed labelled set
+//! must not score below its committed baseline CSV for any affordance at any body height.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use afford::eval::evaluate;
+use afford::model_set::{Source, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
+
+/// `(height in mm, affordance) -> F` of the main (non-doubtful) rows of an eval CSV.
+pub fn baseline(path: &Path) -> BTreeMap<(u32, String), f64> {
+    let mut r = csv::Reader::from_path(path).expect("baseline CSV is committed");
+    let header = r.headers().unwrap().clone();
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let (h, set, id, f) = (col("height"), col("set"), col("affordance"), col("f"));
+    let mut out = BTreeMap::new();
+    for row in r.records() {
+        let row = row.unwrap();
+        if &row[set] != "main" || row[f].is_empty() {
+            continue;
+        }
+        let height: f64 = row[h].parse().unwrap();
+        out.insert(
+            ((height * 1000.0).round() as u32, row[id].to_string()),
+            row[f].parse().unwrap(),
+        );
+    }
+    out
+}
+
+/// Runs `afford eval` on `labels` with the built-in adult and hierarchies at `heights` and
+/// returns one line per (height, affordance) whose F fell below `base`, or has no F where
+/// the baseline has a positive one. Panics when a labelled file could not be scored.
+pub fn drops_below(
+    labels: &Path,
+    base: &BTreeMap<(u32, String), f64>,
+    heights: &[f64],
+) -> Vec<String> {
+    let agent = Source::Builtin("human", BUILTIN_AGENTS[0].1);
+    let hierarchies: Vec<Source> = BUILTIN_HIERARCHIES
+        .iter()
+        .map(|(n, t)| Source::Builtin(n, t))
+        .collect();
+    let ev = evaluate(
+        labels,
+        heights,
+        &agent,
+        &hierarchies,
+        &Default::default(),
+        false,
+    )
+    .unwrap();
+    assert!(ev.failed.is_empty(), "{:?}", ev.failed);
+    let mut drops = Vec::new();
+    for hr in &ev.heights {
+        for s in &hr.scores {
+            let key = ((hr.height * 1000.0).round() as u32, s.id.clone());
+            match (base.get(&key), s.f) {
+                // Baseline values are printed to 4 decimals.
+                (Some(&b), Some(f)) if f < b - 5e-5 => drops.push(format!(
+                    "{} at {} m: F {f:.4} < baseline {b:.4}",
+                    s.id, hr.height
+                )),
+                // An F of 0 that becomes undefined (nothing labelled, nothing found) is
+                // not a drop.
+                (Some(&b), None) if b > 0.0 => drops.push(format!(
+                    "{} at {} m: no F (baseline {b:.4})",
+                    s.id, hr.height
+                )),
+                _ => {}
+            }
+        }
+    }
+    drops
+}
