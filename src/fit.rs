@@ -47,7 +47,10 @@ fn all_round(step: f64) -> Vec<f64> {
 /// Fits the agent at `hyp` (section 4.2) and returns every stable fit, one per heading that
 /// was free before lowering, touched the scene within the allowed drop, and is stable.
 /// When no heading around the hypothesis heading is free, all round headings are tried
-/// (a gradient off by 90 degrees must not lose the place).
+/// (a gradient off by 90 degrees must not lose the place). When still nothing fits, the
+/// hierarchy's `deferred_links` (limbs a node unfolds later, such as arms raised for an
+/// armrest) are left out of the collision tests and every heading is tried again: a limb
+/// that will move must not lose the seat.
 pub fn fit(
     agent: &Agent,
     h: &Hierarchy,
@@ -55,8 +58,27 @@ pub fn fit(
     hyp: &Hypothesis,
     contact: &ContactConfig,
 ) -> Vec<Fit> {
+    let fits = fit_checking(agent, h, scene, hyp, contact, &h.fit.unchecked_links);
+    if !fits.is_empty() || h.fit.deferred_links.is_empty() {
+        return fits;
+    }
+    let mut unchecked = h.fit.unchecked_links.clone();
+    unchecked.extend(&h.fit.deferred_links);
+    fit_checking(agent, h, scene, hyp, contact, &unchecked)
+}
+
+/// [`fit`] with the links `unchecked` left out of the collision tests: the headings
+/// around the hypothesis heading, then all round if none of them was free.
+fn fit_checking(
+    agent: &Agent,
+    h: &Hierarchy,
+    scene: &Scene,
+    hyp: &Hypothesis,
+    contact: &ContactConfig,
+    unchecked: &[usize],
+) -> Vec<Fit> {
     let first = headings(h, hyp);
-    let (fits, any_free) = fit_headings(agent, h, scene, hyp, &first, contact);
+    let (fits, any_free) = fit_headings(agent, h, scene, hyp, &first, contact, unchecked);
     if any_free || hyp.heading.is_none() {
         return fits;
     }
@@ -65,7 +87,7 @@ pub fn fit(
         .into_iter()
         .filter(|y| tried.iter().all(|t| angle_between(*t, *y) > 1e-6))
         .collect();
-    fit_headings(agent, h, scene, hyp, &rest, contact).0
+    fit_headings(agent, h, scene, hyp, &rest, contact, unchecked).0
 }
 
 fn angle_between(a: f64, b: f64) -> f64 {
@@ -73,7 +95,8 @@ fn angle_between(a: f64, b: f64) -> f64 {
     d.min(std::f64::consts::TAU - d)
 }
 
-/// Fits at each heading; also says whether any heading was free at the start.
+/// Fits at each heading, collision-testing every link but `unchecked`; also says whether
+/// any heading was free at the start.
 fn fit_headings(
     agent: &Agent,
     h: &Hierarchy,
@@ -81,6 +104,7 @@ fn fit_headings(
     hyp: &Hypothesis,
     yaws: &[f64],
     contact: &ContactConfig,
+    unchecked: &[usize],
 ) -> (Vec<Fit>, bool) {
     let posture = &h.initial;
     let mut frames = Vec::new();
@@ -109,7 +133,7 @@ fn fit_headings(
         let mut f = Vec::new();
         let mut pose = |t: f64, out: &mut Vec<Cylinder>| {
             agent.forward_kinematics(&at(start_z - t * drop), posture, &mut f);
-            *out = agent.cylinders(&f, |j| !h.fit.unchecked_links.contains(&j));
+            *out = agent.cylinders(&f, |j| !unchecked.contains(&j));
         };
         pose(0.0, &mut parts);
         if parts

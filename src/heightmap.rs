@@ -18,6 +18,13 @@ pub struct HeightMapConfig {
     /// a roof over what is below (a ceiling, an upper bunk, a high shelf), not part of the
     /// furniture the body uses; the floor, z = 0, counts as the lowest layer.
     pub overhang_gap: f64,
+    /// Over a surface at seat height (`seat_band`), a gap this tall (metres) is enough to
+    /// make what is above it a roof: a table top, a shelf or an arm rail over a seat, not
+    /// the seat itself.
+    pub thigh_gap: f64,
+    /// Heights (metres) of the surfaces people sit or lie on: a gap of `thigh_gap` over a
+    /// surface in this band ends the stack.
+    pub seat_band: [f64; 2],
     /// Each point stands for the surface within this many point spacings (the cloud's
     /// median nearest-neighbour distance) of it: it counts in every cell whose centre lies
     /// that close, so a surface sampled more sparsely than the cells has no empty cells.
@@ -36,6 +43,14 @@ impl Default for HeightMapConfig {
             // seat, a bar stool's top over the floor) belongs to the furniture, as in the
             // paper's map; ceilings, upper bunks and shelves above head height do not.
             overhang_gap: 0.85,
+            // 0.15 m: a seated adult's thigh thickness (thigh clearance 0.13-0.18 m, 5th-95th
+            // percentile): desks and tables leave 0.22-0.30 m over a 0.45 m seat, arm rails
+            // over a seat's edges ~0.19 m; cushions and backs rise from the seat without a gap.
+            thigh_gap: 0.15,
+            // Chair and bench seats pushed under tables (0.38-0.50 m) up to the highest
+            // beds and stool seats reached without climbing (0.75 m); from 0.35 m, so that a
+            // chair's leg stretchers (0.15-0.30 m) do not cut the seat above them.
+            seat_band: [0.35, 0.75],
             // One spacing: every point of a surface sampled on a grid is within 0.71 spacings
             // of a sample, so a cell centre farther than a spacing from every sample is off
             // the surface or in a hole; edges grow by at most a spacing. Dense clouds
@@ -138,7 +153,7 @@ impl HeightMap {
             .map(|c| {
                 let column = &mut zs[start[c]..start[c + 1]];
                 column.sort_unstable_by(f64::total_cmp);
-                stack_top(column, cfg.overhang_gap)
+                stack_top(column, cfg)
             })
             .collect();
         HeightMap {
@@ -184,17 +199,20 @@ impl HeightMap {
 }
 
 /// The top of the lowest stack of the sorted heights `column` standing on the floor
-/// (z = 0): the stack ends below the first gap of at least `gap` metres. `None` for an
-/// empty column or one whose lowest point is `gap` or more above the floor (only a roof
-/// was seen there).
-fn stack_top(column: &[f64], gap: f64) -> Option<f64> {
+/// (z = 0): the stack ends below the first gap of at least `cfg.overhang_gap` metres, or
+/// of `cfg.thigh_gap` over a top in `cfg.seat_band`. `None` for an empty column or one
+/// whose lowest point is `cfg.overhang_gap` or more above the floor (only a roof was seen
+/// there).
+fn stack_top(column: &[f64], cfg: &HeightMapConfig) -> Option<f64> {
     let (&first, rest) = column.split_first()?;
-    if first >= gap {
+    if first >= cfg.overhang_gap {
         return None;
     }
+    let [seat_lo, seat_hi] = cfg.seat_band;
     let mut top = first;
     for &z in rest {
-        if z - top >= gap {
+        let gap = z - top;
+        if gap >= cfg.overhang_gap || (gap >= cfg.thigh_gap && (seat_lo..=seat_hi).contains(&top)) {
             break;
         }
         top = z;
@@ -336,13 +354,19 @@ mod tests {
 
     #[test]
     fn stack_tops() {
-        assert_eq!(stack_top(&[], 0.85), None);
-        assert_eq!(stack_top(&[0.0, 0.2, 0.45], 0.85), Some(0.45));
-        assert_eq!(stack_top(&[0.0, 0.45, 1.2, 2.5], 0.85), Some(1.2));
-        assert_eq!(stack_top(&[0.0, 0.45, 1.3, 2.5], 0.85), Some(0.45));
-        assert_eq!(stack_top(&[0.9, 1.0], 0.85), None);
-        assert_eq!(stack_top(&[0.75], 0.85), Some(0.75));
-        assert_eq!(stack_top(&[-0.01, 0.9], 0.85), Some(-0.01));
+        let c = HeightMapConfig::default();
+        assert_eq!(stack_top(&[], &c), None);
+        // A leg stretcher under a seat.
+        assert_eq!(stack_top(&[0.0, 0.2, 0.45], &c), Some(0.45));
+        // A back rising from a seat in small steps.
+        assert_eq!(stack_top(&[0.0, 0.45, 0.6, 0.75, 0.9], &c), Some(0.9));
+        // A table top 0.25 m over a seat; a shelf 0.75 m over the floor.
+        assert_eq!(stack_top(&[0.0, 0.45, 0.7, 0.72], &c), Some(0.45));
+        assert_eq!(stack_top(&[0.0, 0.75], &c), Some(0.75));
+        assert_eq!(stack_top(&[0.0, 0.45, 1.3, 2.5], &c), Some(0.45));
+        assert_eq!(stack_top(&[0.9, 1.0], &c), None);
+        assert_eq!(stack_top(&[0.75], &c), Some(0.75));
+        assert_eq!(stack_top(&[-0.01, 0.9], &c), Some(-0.01));
     }
 
     #[test]

@@ -75,6 +75,10 @@ pub struct FitRule {
     /// Links left out of the collision tests of the fitting, because a node unfolds them
     /// afterwards (joint indices).
     pub unchecked_links: Vec<usize>,
+    /// Links a node unfolds afterwards that are checked while fitting, except when no
+    /// heading fits with them: then the fit is tried again without them, so that arms
+    /// raised for an armrest do not lose a seat whose arm rails they meet (joint indices).
+    pub deferred_links: Vec<usize>,
 }
 
 /// How the best pose of a hypothesis, and the strongest of neighbouring detections, are chosen.
@@ -239,6 +243,8 @@ struct FitFile {
     stability_links: Vec<String>,
     #[serde(default)]
     unchecked_links: Vec<String>,
+    #[serde(default)]
+    deferred_links: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -350,6 +356,7 @@ impl Hierarchy {
         }
         let unchecked_links =
             names.links(&fit.key("unchecked_links"), &file.fit.unchecked_links)?;
+        let deferred_links = names.links(&fit.key("deferred_links"), &file.fit.deferred_links)?;
         let key = |i: usize| Key::top("node").item(i, &file.node[i].id);
         let order = tree_order(
             src,
@@ -382,6 +389,7 @@ impl Hierarchy {
                 sample_spacing: f.sample_spacing,
                 stability_links,
                 unchecked_links,
+                deferred_links,
             },
             score: ScoreRule {
                 sigma_theta: file.score.sigma_theta.to_radians(),

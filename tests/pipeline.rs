@@ -199,3 +199,120 @@ fn output_does_not_depend_on_the_thread_count() {
     assert!(!one.detections.is_empty());
     assert_eq!(one, two);
 }
+
+/// A wooden armchair whose arm rails rest on the front legs carried up as posts and run
+/// back to the back posts right over the seat's side edges (PITFALLS and issue 11: 12 of
+/// 16 such chairs got no sitting: the rails flank the seat, the gradient heading is off by
+/// 90 degrees, and the raised arms of the initial pose meet a rail at every heading).
+fn wooden_armchair() -> Mesh {
+    let (hx, hy, seat, leg) = (0.23, 0.27, 0.44, 0.04);
+    let (rail_top, rail_w) = (seat + 0.22, 0.05);
+    let mut m = Mesh::new();
+    let p = Point3::new;
+    m.add_box(p(-hx, -hy, seat - 0.04), p(hx, hy, seat), Part::Seat);
+    for (x, y) in [
+        (-hx, -hy),
+        (-hx, hy - leg),
+        (hx - leg, -hy),
+        (hx - leg, hy - leg),
+    ] {
+        // Front legs rise to the rails; back legs rise into the back.
+        let top = if x > 0.0 { rail_top } else { seat + 0.45 };
+        m.add_box(p(x, y, 0.0), p(x + leg, y + leg, top), Part::Other);
+    }
+    for y0 in [-hy - 0.01, hy - rail_w + 0.01] {
+        m.add_box(
+            p(-hx, y0, rail_top - 0.03),
+            p(hx + 0.02, y0 + rail_w, rail_top),
+            Part::Armrest,
+        );
+    }
+    // Back: slats between the back legs, leaning on nothing (upright).
+    m.add_box(
+        p(-hx, -hy, seat + 0.10),
+        p(-hx + 0.03, hy, seat + 0.45),
+        Part::Backrest,
+    );
+    m
+}
+
+#[test]
+fn a_wooden_armchair_with_arm_rails_on_its_front_posts_gives_sitting_and_armrest() {
+    check(&[wooden_armchair()], &["sitting", "backrest", "armrest"]);
+    // Depth views from the front and the front corners, the camera 1.5 m high, 1.6 m away.
+    let scene = scene_mesh(&[wooden_armchair()], true);
+    for deg in [-40.0f64, 0.0, 40.0] {
+        let (s, c) = deg.to_radians().sin_cos();
+        let cam = camera::Camera::looking_at(
+            Point3::new(1.6 * c, 1.6 * s, 1.5),
+            Point3::new(0.0, 0.0, 0.45),
+        );
+        let view = camera::render_view(&scene, &cam, 3).0;
+        let o = run(&view, 1.75);
+        assert_eq!(
+            affords(&o),
+            ["sitting", "backrest", "armrest"],
+            "view from {deg} deg: {:?}",
+            o.stats
+        );
+    }
+}
+
+/// Issue 11: in a room scan the highest point of every cell is the ceiling, which left
+/// the paper's height map without a single seat.
+#[test]
+fn a_room_with_a_ceiling_still_gives_its_seats() {
+    let furniture = [
+        chair(&ChairParams::with_arms()),
+        sofa(&SofaParams::default()).placed(2.0, 0.0, 180.0),
+    ];
+    let open = cloud(&furniture);
+    let mut roofed = furniture.to_vec();
+    let mut ceiling = Mesh::new();
+    ceiling.add_box(
+        Point3::new(-1.5, -2.5, 2.5),
+        Point3::new(3.5, 2.5, 2.55),
+        Part::Other,
+    );
+    roofed.push(ceiling);
+    let o = run(&cloud(&roofed), 1.75);
+    assert!(o.detections.len() >= 3, "{:?}", o.stats);
+    assert_eq!(affords(&o), affords(&run(&open, 1.75)));
+    assert_eq!(affords(&o), ["sitting", "backrest", "armrest"]);
+}
+
+/// Keeps one point per `step` metre voxel of `c` (the first in the cloud's order): the
+/// sampling of a reconstruction read as mesh vertices (6 cm voxels leave neighbours 3-8 cm
+/// apart, ~4 cm typical, like ScanNet's cleaned meshes).
+fn vertex_grid(c: &PointCloud, step: f64) -> PointCloud {
+    let mut seen = std::collections::HashSet::new();
+    PointCloud::new(
+        c.points
+            .iter()
+            .filter(|p| seen.insert((p.coords / step).map(|v| v.floor() as i64)))
+            .copied()
+            .collect(),
+    )
+}
+
+/// Issue 11: a reconstruction read as points (vertices ~4 cm apart) broke the height map
+/// tuned on dense clouds: chairs and beds in it got nothing.
+#[test]
+fn a_cloud_of_4_cm_vertices_gives_sitting_and_lying() {
+    let c = vertex_grid(
+        &cloud(&[
+            chair(&ChairParams::default()),
+            bed(&BedParams::single()).placed(0.0, 1.8, 0.0),
+        ]),
+        0.06,
+    );
+    let agent = Agent::load(Path::new("agents/human.toml"), 1.75).unwrap();
+    let lying = Hierarchy::load(Path::new("affordances/lying.toml"), &agent).unwrap();
+    assert!(!run(&c, 1.75).detections.is_empty(), "no sitting");
+    let o = detect(&c, &agent, &lying, &DetectConfig::default());
+    assert!(
+        o.detections.iter().any(|d| d.position.y > 1.0),
+        "no lying on the bed: {:?}",
+        o.stats
+    );
+}
