@@ -16,6 +16,7 @@ pub mod cli;
 pub mod cloud;
 pub mod detect;
 pub mod eval;
+pub mod extent;
 pub mod fit;
 pub mod fuzzy;
 pub mod heightmap;

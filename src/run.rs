@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use crate::agent::Agent;
 use crate::batch::{self, LogLine, Shard, Status};
 use crate::cloud;
-use crate::detect::{detect_all, DetectConfig};
+use crate::detect::{detect_all_prepared, prepare, DetectConfig};
+use crate::extent::{guard, ExtentConfig, ExtentError};
 use crate::hierarchy::Hierarchy;
 use crate::input::{load_input, Input, InputOptions};
 use crate::model::ModelError;
@@ -109,7 +110,7 @@ pub fn detect_file(
     path: &Path,
     models: &[Model],
     cfg: &DetectConfig,
-) -> Result<FileReport, cloud::CloudError> {
+) -> Result<FileReport, FileError> {
     let loaded = cloud::load(path)?;
     Ok(report_of(
         path,
@@ -117,23 +118,38 @@ pub fn detect_file(
         loaded.dropped_non_finite,
         models,
         cfg,
-    ))
+    )?)
 }
 
+/// Why one file gave no report.
+#[derive(Debug, thiserror::Error)]
+pub enum FileError {
+    /// It could not be read.
+    #[error(transparent)]
+    Cloud(#[from] cloud::CloudError),
+    /// Its extent or coordinates are refused before the grids ([`crate::extent`]).
+    #[error(transparent)]
+    Extent(#[from] ExtentError),
+}
+
+/// Detection on one cloud: the grids are built from the points [`crate::extent::guard`]
+/// keeps; the segments and the report cover every point of `cloud`.
 fn report_of(
     path: &Path,
     cloud: &cloud::PointCloud,
     dropped: usize,
     models: &[Model],
     cfg: &DetectConfig,
-) -> FileReport {
-    FileReport::new(
+) -> Result<FileReport, ExtentError> {
+    let kept = guard(path, cloud, cfg, &ExtentConfig::default())?;
+    let prepared = prepare(&kept.cloud, cfg);
+    Ok(FileReport::new(
         path.display().to_string(),
         cloud.len(),
         dropped,
         models,
-        detect_all(cloud, models, cfg),
-    )
+        detect_all_prepared(cloud, &prepared, models, cfg),
+    ))
 }
 
 /// Where a per-input output of `input` goes: `base` itself for a single input, otherwise
@@ -225,13 +241,17 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             None
         } else {
             let start = std::time::Instant::now();
-            let done = detect_one(req, &models, path, several, saved.as_deref());
+            let done = detect_one(req, &models, path, several, saved.as_deref(), &mut |n| {
+                // Warnings (units above all) go out before detection, which may take long.
+                bar.suspend(|| {
+                    let _ = err.write_all(n);
+                })
+            });
             line.seconds = Some((start.elapsed().as_secs_f64() * 1000.0).round() / 1000.0);
             Some(done)
         };
         bar.suspend(|| {
             let Some(done) = &done else { return };
-            let _ = err.write_all(&done.notes);
             for e in &done.errors {
                 let _ = writeln!(err, "error: {e}");
             }
@@ -294,11 +314,10 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     }
 }
 
-/// What one input gave: its report (when it could be read), its notes for stderr, and
-/// the errors of reading it or writing its per-file outputs.
+/// What one input gave: its report (when it could be read), and the errors of reading it
+/// or writing its per-file outputs.
 struct Done {
     report: Option<FileReport>,
-    notes: Vec<u8>,
     errors: Vec<String>,
 }
 
@@ -310,10 +329,10 @@ fn detect_one(
     path: &Path,
     several: bool,
     saved: Option<&Path>,
+    warn: &mut dyn FnMut(&[u8]),
 ) -> Done {
     let mut done = Done {
         report: None,
-        notes: Vec::new(),
         errors: Vec::new(),
     };
     let input = match load_input(path, &req.input) {
@@ -323,14 +342,22 @@ fn detect_one(
             return done;
         }
     };
-    notes(&input, path, &mut done.notes);
-    let r = report_of(
+    let mut notes_text = Vec::new();
+    notes(&input, path, &mut notes_text);
+    warn(&notes_text);
+    let r = match report_of(
         path,
         &input.cloud,
         input.dropped_non_finite,
         models,
         &req.config,
-    );
+    ) {
+        Ok(r) => r,
+        Err(e) => {
+            done.errors.push(e.to_string());
+            return done;
+        }
+    };
     if let Some(base) = &req.segments {
         let target = per_input_path(base, path, several);
         if let Err(e) = write_segments(&input, &target, &r) {
@@ -418,7 +445,19 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
         }
     };
     notes(&loaded, &req.file, err);
-    let prepared = crate::detect::prepare(&loaded.cloud, &req.config);
+    let kept = match guard(
+        &req.file,
+        &loaded.cloud,
+        &req.config,
+        &ExtentConfig::default(),
+    ) {
+        Ok(k) => k,
+        Err(e) => {
+            let _ = writeln!(err, "error: {e}");
+            return 2;
+        }
+    };
+    let prepared = prepare(&kept.cloud, &req.config);
     let hyps = models
         .first()
         .map(|m| {

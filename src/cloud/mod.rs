@@ -16,7 +16,7 @@ pub use frame::{
     check_units, parse_matrix, to_world, FloorMode, FrameError, FrameOptions, FrameReport, Units,
     Up,
 };
-pub use mesh::{read_mesh, sample_mesh};
+pub use mesh::{expected_samples, read_mesh, sample_mesh, MAX_SAMPLES};
 pub use pcd::{read_pcd, write_pcd};
 pub use ply::{read_ply, read_ply_property, write_ply_points};
 pub(crate) use ply::{write_ply_typed, Scalar};

@@ -17,6 +17,10 @@ use super::CloudError;
 
 /// Largest output one LZF input byte can produce (a 3-byte back reference yields 264 bytes).
 const LZF_MAX_RATIO: u64 = 88;
+/// Most bytes one point's record may take: one field of the largest COUNT (1048576) of
+/// 8 bytes and as much again; real clouds take a few dozen bytes. The record buffer is
+/// allocated before any point is read, so this bounds what a header alone can ask for.
+const MAX_RECORD: usize = 16 << 20;
 
 /// One field of a PCD record.
 #[derive(Debug, Clone)]
@@ -268,6 +272,16 @@ fn parse_header<R: io::BufRead>(path: &Path, r: &mut R) -> Result<Header, CloudE
     }
     // At most 64 KiB / 2 fields of at most 8 MiB each: cannot overflow.
     let record: usize = fields.iter().map(Field::bytes).sum();
+    if record > MAX_RECORD {
+        return Err(header_err(
+            path,
+            format!("line {}", counts.1),
+            format!(
+                "one point takes {record} bytes (SIZE x COUNT over all fields), more than the \
+                 {MAX_RECORD} this reader accepts"
+            ),
+        ));
+    }
 
     let mut xyz = [(0, 0, 0); 3];
     for (k, name) in ["x", "y", "z"].iter().enumerate() {

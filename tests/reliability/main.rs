@@ -1,0 +1,14 @@
+//! Reliability (issue 15): no input aborts a run, no output destroys a file, every failure
+//! says what it is. One module per problem, each opening with its cause; the malformed
+//! inputs are built in the tests.
+
+mod common;
+
+mod batch_under_address_limit;
+mod fine_voxel_budget;
+mod huge_coordinates;
+mod millimetres_warn_first;
+mod obj_nan_area_cap;
+mod off_corner_overflow;
+mod pcd_huge_record;
+mod stray_point_extent;
