@@ -8,6 +8,7 @@ mod batch_under_address_limit;
 mod fine_voxel_budget;
 mod huge_coordinates;
 mod millimetres_warn_first;
+mod model_absurd_numbers;
 mod obj_nan_area_cap;
 mod off_corner_overflow;
 mod pcd_huge_record;
