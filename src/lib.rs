@@ -11,6 +11,7 @@
 
 pub mod agent;
 pub mod agent_mesh;
+pub mod atomic;
 pub mod batch;
 pub mod cli;
 pub mod cloud;

@@ -203,6 +203,12 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     }
     let files = &inputs.files;
     let several = inputs.total > 1;
+    if let Err(e) = check_outputs(req, files, several) {
+        let _ = writeln!(err, "error: {e}");
+        return 2;
+    }
+    // The first error writing standard output (a full disk, a closed pipe): reported at the end.
+    let mut out_error: Option<std::io::Error> = None;
     let bar = if req.progress && files.len() > 1 {
         let bar = indicatif::ProgressBar::new(files.len() as u64);
         if let Ok(style) =
@@ -256,7 +262,9 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
                 let _ = writeln!(err, "error: {e}");
             }
             if let (true, Some(r)) = (table, &done.report) {
-                let _ = out.write_all(report::to_table(r).as_bytes());
+                if let Err(e) = out.write_all(report::to_table(r).as_bytes()) {
+                    out_error.get_or_insert(e);
+                }
             }
         });
         if let Some(done) = done {
@@ -275,9 +283,13 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             }
         }
         if req.log_json {
-            let _ = bar.suspend(|| writeln!(out, "{}", line.to_json()));
+            if let Err(e) = bar.suspend(|| writeln!(out, "{}", line.to_json())) {
+                out_error.get_or_insert(e);
+            }
         }
-        let _ = out.flush();
+        if let Err(e) = out.flush() {
+            out_error.get_or_insert(e);
+        }
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -307,11 +319,63 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
         }
         let _ = writeln!(err, "{s}");
     }
+    if let Some(e) = &out_error {
+        let _ = writeln!(err, "error: standard output: cannot write: {e}");
+        unwritten += 1;
+    }
     if failed + unwritten > 0 {
         2
     } else {
         0
     }
+}
+
+/// Refuses outputs that would destroy an input or each other: an output (`--json`,
+/// `--csv`, `--summary`, or the per-input `--segments`/`--mesh` file of any input) that is
+/// one of the inputs, and two inputs whose per-input outputs share a name
+/// ([`per_input_path`] uses the file stem: `a/chair.ply` and `b/chair.pcd` clash).
+fn check_outputs(req: &DetectRequest, files: &[PathBuf], several: bool) -> Result<(), String> {
+    let mut targets: Vec<(&str, PathBuf)> = Vec::new();
+    for (flag, p) in [
+        ("--json", &req.json),
+        ("--csv", &req.csv),
+        ("--summary", &req.summary),
+    ] {
+        if let Some(p) = p {
+            targets.push((flag, p.clone()));
+        }
+    }
+    for (flag, base) in [("--segments", &req.segments), ("--mesh", &req.mesh)] {
+        if let Some(base) = base {
+            let mut seen: std::collections::BTreeMap<PathBuf, &Path> = Default::default();
+            for f in files {
+                let t = per_input_path(base, f, several);
+                if let Some(first) = seen.insert(t.clone(), f) {
+                    return Err(format!(
+                        "{flag}: {} and {} would both be written to {}",
+                        first.display(),
+                        f.display(),
+                        t.display()
+                    ));
+                }
+                targets.push((flag, t));
+            }
+        }
+    }
+    let inputs: std::collections::HashMap<PathBuf, &PathBuf> = files
+        .iter()
+        .filter_map(|f| std::fs::canonicalize(f).ok().map(|c| (c, f)))
+        .collect();
+    for (flag, t) in &targets {
+        if let Some(f) = std::fs::canonicalize(t).ok().and_then(|c| inputs.get(&c)) {
+            return Err(format!(
+                "{flag} {}: is the input {}; refusing to replace it",
+                t.display(),
+                f.display()
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// What one input gave: its report (when it could be read), and the errors of reading it
@@ -683,6 +747,14 @@ pub struct ConvertRequest {
 /// Runs `afford convert`: reads any input the detector reads (with the same frame options)
 /// and writes it as PLY (binary or ascii) or binary PCD, in metres, z up, floor at z = 0.
 pub fn run_convert(req: &ConvertRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    if crate::atomic::same_file(&req.input, &req.output) {
+        let _ = writeln!(
+            err,
+            "error: {}: is the input; refusing to replace it",
+            req.output.display()
+        );
+        return 2;
+    }
     let input = match load_input(&req.input, &req.options) {
         Ok(i) => i,
         Err(e) => {

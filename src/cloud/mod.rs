@@ -50,6 +50,15 @@ pub enum CloudError {
         #[source]
         source: std::io::Error,
     },
+    /// The file could not be written.
+    #[error("{path}: cannot write: {source}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
     /// The header is malformed; `at` says where (line or byte).
     #[error("{path}: bad header at {at}: {what}")]
     Header {

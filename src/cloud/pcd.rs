@@ -600,7 +600,6 @@ fn lzf_decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, (usize, Strin
 /// [`read_pcd`] gives the same points back (rounded to f32). The file is written to a
 /// temporary file beside `path` and renamed into place; the same points give the same bytes.
 pub fn write_pcd(path: &Path, points: &[Point3<f64>]) -> Result<(), CloudError> {
-    use std::io::Write;
     let mut bytes = format!(
         "# .PCD v0.7 - Point Cloud Data file format (written by afford)\nVERSION 0.7\n\
          FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {n}\nHEIGHT 1\n\
@@ -614,21 +613,9 @@ pub fn write_pcd(path: &Path, points: &[Point3<f64>]) -> Result<(), CloudError> 
             bytes.extend_from_slice(&(*c as f32).to_le_bytes());
         }
     }
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(format!(".tmp-{}", std::process::id()));
-    let tmp = path.with_file_name(name);
-    let result = File::create(&tmp)
-        .and_then(|mut f| {
-            f.write_all(&bytes)?;
-            f.sync_all()
-        })
-        .and_then(|()| std::fs::rename(&tmp, path));
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        CloudError::Io {
-            path: path.to_path_buf(),
-            source: e,
-        }
+    crate::atomic::write_bytes(path, &bytes).map_err(|source| CloudError::Write {
+        path: path.to_path_buf(),
+        source,
     })
 }
 

@@ -6,8 +6,8 @@
 //! after the vertices, including list properties.
 
 use std::fs::File;
-use std::io::{self, BufRead, BufReader, BufWriter, Read, Write};
-use std::path::{Path, PathBuf};
+use std::io::{self, BufRead, BufReader, Read, Write};
+use std::path::Path;
 
 use nalgebra::Point3;
 
@@ -137,7 +137,7 @@ impl Scalar {
     }
 
     /// Writes `v` as this type, little-endian (`as` casts: integers truncated and saturated).
-    fn write_le<W: Write>(self, w: &mut W, v: f64) -> io::Result<()> {
+    fn write_le<W: Write + ?Sized>(self, w: &mut W, v: f64) -> io::Result<()> {
         match self {
             Scalar::I8 => w.write_all(&(v as i8).to_le_bytes()),
             Scalar::U8 => w.write_all(&(v as u8).to_le_bytes()),
@@ -152,7 +152,7 @@ impl Scalar {
 
     /// Writes `v` as this type in ascii, with the casts of [`Scalar::write_le`]; NaN as
     /// `nan`, as C's printf writes it, which most PLY tools read.
-    fn write_ascii<W: Write>(self, w: &mut W, v: f64) -> io::Result<()> {
+    fn write_ascii<W: Write + ?Sized>(self, w: &mut W, v: f64) -> io::Result<()> {
         let v = self.decode(&self.le_bytes(v), false);
         match self {
             _ if v.is_nan() => write!(w, "nan"),
@@ -740,9 +740,9 @@ pub(super) fn shorten(s: &str) -> String {
 /// Writes points (metres) as a PLY file: vertex `x`, `y`, `z` as `float`, then one `float`
 /// property per entry of `extra` (its name and one value per point, e.g. `detection`).
 ///
-/// `binary` selects `binary_little_endian`, otherwise `ascii`. The file is written to
-/// `<name>.tmp-<pid>` in the same directory and renamed into place, so readers never see a
-/// half-written file; the temporary file is removed on error.
+/// `binary` selects `binary_little_endian`, otherwise `ascii`. The file is written as
+/// [`crate::atomic::write_with`] writes: through a temporary file renamed into place, so
+/// readers never see a half-written file (the temporary file is removed on error).
 pub fn write_ply_points(
     path: &Path,
     points: &[Point3<f64>],
@@ -789,30 +789,16 @@ pub(crate) fn write_ply_typed(
             format!("'{}' is not one line", shorten(c)),
         ));
     }
-    let tmp = temp_path(path);
-    let result = File::create(&tmp)
-        .and_then(|f| {
-            let mut w = BufWriter::new(f);
-            write_body(&mut w, points, extra, comments, binary)?;
-            let f = w.into_inner().map_err(|e| e.into_error())?;
-            f.sync_all()
-        })
-        .and_then(|()| std::fs::rename(&tmp, path));
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io_err(path, e)
-    })
+    crate::atomic::write_with(path, |w| write_body(w, points, extra, comments, binary)).map_err(
+        |source| CloudError::Write {
+            path: path.to_path_buf(),
+            source,
+        },
+    )
 }
 
-/// `<dir>/<name>.tmp-<pid>` next to `path`.
-fn temp_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(format!(".tmp-{}", std::process::id()));
-    path.with_file_name(name)
-}
-
-fn write_body<W: Write>(
-    w: &mut W,
+fn write_body(
+    w: &mut dyn Write,
     points: &[Point3<f64>],
     extra: &[(&str, Scalar, &[f64])],
     comments: &[String],
@@ -901,6 +887,7 @@ mod tests {
         Addable, DefaultElement, ElementDef, Encoding as PlyEncoding, Ply, Property, PropertyDef,
         PropertyType, ScalarType,
     };
+    use std::path::PathBuf;
 
     fn file(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> PathBuf {
         let p = dir.path().join(name);
@@ -1151,9 +1138,9 @@ mod tests {
         let e = write_ply_points(&p, &pts, &[("x", vec![1.0, 2.0])], true).unwrap_err();
         assert!(matches!(e, CloudError::Header { .. }), "{e}");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
-        // A directory that does not exist: Io error, no panic.
+        // A directory that does not exist: a write error, no panic.
         let e = write_ply_points(&dir.path().join("no/o.ply"), &pts, &[], false).unwrap_err();
-        assert!(matches!(e, CloudError::Io { .. }), "{e}");
+        assert!(matches!(e, CloudError::Write { .. }), "{e}");
     }
 
     #[test]
