@@ -168,7 +168,19 @@ impl InputArgs {
                 } else {
                     t.clone()
                 };
-                Some(parse_matrix(&text).map_err(|e| format!("--transform {t}: {e}"))?)
+                Some(parse_matrix(&text).map_err(|e| {
+                    // Not 16 numbers and no such file: most likely a mistyped file name.
+                    let numeric = t.chars().any(|c| c.is_ascii_digit())
+                        && t.split(|c: char| c.is_whitespace() || ",;[]".contains(c))
+                            .filter(|w| !w.is_empty())
+                            .count()
+                            > 1;
+                    if numeric {
+                        format!("--transform {t}: {e}")
+                    } else {
+                        format!("--transform {t}: no such file, and not a matrix of 16 numbers")
+                    }
+                })?)
             }
         };
         if let Some(d) = self.sample {

@@ -184,14 +184,14 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     let models = match req.models.load() {
         Ok(m) => m,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
     let inputs = match batch::gather(&req.files, &req.lists, req.shard, req.out_dir.is_some()) {
         Ok(i) => i,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
@@ -204,7 +204,7 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     let files = &inputs.files;
     let several = inputs.total > 1;
     if let Err(e) = check_outputs(req, files, several) {
-        let _ = writeln!(err, "error: {e}");
+        let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
         return 2;
     }
     // The first error writing standard output (a full disk, a closed pipe): reported at the end.
@@ -242,9 +242,18 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             affordances: None,
             seconds: None,
         };
-        let done = if req.resume && saved.as_ref().is_some_and(|s| s.exists()) {
-            skipped += 1;
-            None
+        let resumed = saved.as_deref().filter(|s| req.resume && s.exists());
+        let done = if let Some(s) = resumed {
+            match check_saved_models(s, &models) {
+                Ok(()) => {
+                    skipped += 1;
+                    None
+                }
+                Err(e) => Some(Done {
+                    report: None,
+                    errors: vec![batch::printable(&e)],
+                }),
+            }
         } else {
             let start = std::time::Instant::now();
             let done = detect_one(req, &models, path, several, saved.as_deref(), &mut |n| {
@@ -259,7 +268,7 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
         bar.suspend(|| {
             let Some(done) = &done else { return };
             for e in &done.errors {
-                let _ = writeln!(err, "error: {e}");
+                let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             }
             if let (true, Some(r)) = (table, &done.report) {
                 if let Err(e) = out.write_all(report::to_table(r).as_bytes()) {
@@ -305,9 +314,28 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             }
         }
     };
-    write(&req.json, Ok(report::to_json(&reports)));
-    write(&req.csv, report::to_csv(&reports));
-    write(&req.summary, report::to_summary(&reports));
+    if skipped > 0 {
+        // The skipped inputs have no report in this run: writing the run-wide outputs
+        // would replace a complete run's with a part of it (or with nothing).
+        for (flag, target) in [
+            ("--json", &req.json),
+            ("--csv", &req.csv),
+            ("--summary", &req.summary),
+        ] {
+            if let Some(p) = target {
+                let _ = writeln!(
+                    err,
+                    "note: {flag} {}: not written, {skipped} inputs were skipped by --resume \
+                     (their results are in --out-dir; `afford eval --from` reads them)",
+                    p.display()
+                );
+            }
+        }
+    } else {
+        write(&req.json, Ok(report::to_json(&reports)));
+        write(&req.csv, report::to_csv(&reports));
+        write(&req.summary, report::to_summary(&reports));
+    }
     if several || req.shard.is_some() {
         let mut s = match req.shard {
             Some(k) => format!("shard {k}: {} of {} files", files.len(), inputs.total),
@@ -328,6 +356,44 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     } else {
         0
     }
+}
+
+/// Checks that the saved result `saved` (an `--out-dir` JSON) was made with the bodies and
+/// hierarchies of this run, so that `--resume` does not mix models in one folder.
+fn check_saved_models(saved: &Path, models: &[Model]) -> Result<(), String> {
+    let key =
+        |agent: &str, height: f64, hierarchy: &str| format!("{agent} {height:.3} m {hierarchy}");
+    let mut want: Vec<String> = models
+        .iter()
+        .map(|m| key(&m.agent.name, m.agent.height, &m.hierarchy.name))
+        .collect();
+    let bad = |what: String| format!("{}: {what}", saved.display());
+    let text = std::fs::read_to_string(saved).map_err(|e| bad(format!("cannot read: {e}")))?;
+    let doc: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| bad(format!("not a saved result: {e}")))?;
+    let runs = doc["files"][0]["runs"]
+        .as_array()
+        .ok_or_else(|| bad("not a saved result: no runs".into()))?;
+    let mut got: Vec<String> = runs
+        .iter()
+        .map(|r| {
+            key(
+                r["agent"].as_str().unwrap_or("?"),
+                r["height"].as_f64().unwrap_or(f64::NAN),
+                r["hierarchy"].as_str().unwrap_or("?"),
+            )
+        })
+        .collect();
+    want.sort();
+    got.sort();
+    if got != want {
+        return Err(bad(format!(
+            "saved with other models ({}) than this run ({}); use another --out-dir or remove it",
+            got.join(", "),
+            want.join(", ")
+        )));
+    }
+    Ok(())
 }
 
 /// Refuses outputs that would destroy an input or each other: an output (`--json`,
@@ -402,13 +468,17 @@ fn detect_one(
     let input = match load_input(path, &req.input) {
         Ok(i) => i,
         Err(e) => {
-            done.errors.push(e.to_string());
+            done.errors.push(batch::printable(&e.to_string()));
             return done;
         }
     };
     let mut notes_text = Vec::new();
     notes(&input, path, &mut notes_text);
-    warn(&notes_text);
+    let notes_text: String = String::from_utf8_lossy(&notes_text)
+        .lines()
+        .map(|l| batch::printable(l) + "\n")
+        .collect();
+    warn(notes_text.as_bytes());
     let r = match report_of(
         path,
         &input.cloud,
@@ -418,28 +488,32 @@ fn detect_one(
     ) {
         Ok(r) => r,
         Err(e) => {
-            done.errors.push(e.to_string());
+            done.errors.push(batch::printable(&e.to_string()));
             return done;
         }
     };
     if let Some(base) = &req.segments {
         let target = per_input_path(base, path, several);
         if let Err(e) = write_segments(&input, &target, &r) {
-            done.errors.push(e.to_string());
+            done.errors.push(batch::printable(&e.to_string()));
         }
     }
     if let Some(base) = &req.mesh {
         let target = per_input_path(base, path, several);
         if let Err(e) = crate::agent_mesh::agent_mesh_ply(&r.detections, &target) {
-            done.errors
-                .push(format!("{}: cannot write: {e}", target.display()));
+            done.errors.push(batch::printable(&format!(
+                "{}: cannot write: {e}",
+                target.display()
+            )));
         }
     }
     if let (Some(target), true) = (saved, done.errors.is_empty()) {
         let json = report::to_json(std::slice::from_ref(&r));
         if let Err(e) = report::write_atomic(target, json.as_bytes()) {
-            done.errors
-                .push(format!("{}: cannot write: {e}", target.display()));
+            done.errors.push(batch::printable(&format!(
+                "{}: cannot write: {e}",
+                target.display()
+            )));
         }
     }
     done.report = Some(r);
@@ -497,14 +571,14 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
     let models = match req.models.load() {
         Ok(m) => m,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
     let loaded = match load_input(&req.file, &req.input) {
         Ok(l) => l,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
@@ -517,7 +591,7 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
     ) {
         Ok(k) => k,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
@@ -600,7 +674,7 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
                 0
             }
             Err(e) => {
-                let _ = writeln!(err, "error: {e}");
+                let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
                 2
             }
         };
@@ -615,7 +689,7 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
                     }
                 }
                 Err(e) => {
-                    let _ = writeln!(err, "error: {e}");
+                    let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
                     failed += 1;
                 }
             }
@@ -645,7 +719,7 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
             0
         }
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             2
         }
     }
@@ -686,7 +760,7 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
     let (agents, hierarchies) = match choice.sources() {
         Ok(s) => s,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
@@ -711,7 +785,7 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
     let ev = match ev {
         Ok(ev) => ev,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
@@ -724,6 +798,13 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
                 code = 2;
             }
         }
+    }
+    for (file, why) in &ev.failed {
+        let _ = writeln!(
+            err,
+            "error: {}",
+            batch::printable(&format!("{file}: {why}"))
+        );
     }
     if !ev.failed.is_empty() {
         code = 2;
@@ -758,7 +839,7 @@ pub fn run_convert(req: &ConvertRequest, out: &mut dyn Write, err: &mut dyn Writ
     let input = match load_input(&req.input, &req.options) {
         Ok(i) => i,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
@@ -768,6 +849,24 @@ pub fn run_convert(req: &ConvertRequest, out: &mut dyn Write, err: &mut dyn Writ
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
+    // Both formats hold 32-bit floats: a finite coordinate beyond their range would be
+    // written as infinity.
+    let limit = f64::from(f32::MAX);
+    if let Some((i, c)) = input
+        .cloud
+        .points
+        .iter()
+        .enumerate()
+        .find_map(|(i, p)| p.coords.iter().find(|c| c.abs() > limit).map(|&c| (i, c)))
+    {
+        let _ = writeln!(
+            err,
+            "error: {}: point {i}: coordinate {c:.3e} does not fit the 32-bit floats of {}",
+            req.input.display(),
+            req.output.display()
+        );
+        return 2;
+    }
     let written = match ext.as_deref() {
         Some("ply") => cloud::write_ply_points(&req.output, &input.cloud.points, &[], !req.ascii),
         Some("pcd") if !req.ascii => cloud::write_pcd(&req.output, &input.cloud.points),
@@ -795,7 +894,7 @@ pub fn run_convert(req: &ConvertRequest, out: &mut dyn Write, err: &mut dyn Writ
             0
         }
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             2
         }
     }

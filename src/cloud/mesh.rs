@@ -135,6 +135,7 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>, CloudError> {
         path: path.to_path_buf(),
         source,
     };
+    super::regular_file(path)?;
     let mut f = std::fs::File::open(path).map_err(io)?;
     let len = f.metadata().map_err(io)?.len();
     let too_big = || {

@@ -337,6 +337,28 @@ pub fn read_pcd(path: &Path) -> Result<Vec<Point3<f64>>, CloudError> {
         Data::Binary => read_binary(path, &mut r, &h, body_len)?,
         Data::Compressed => read_compressed(path, &mut r, &h, body_len)?,
     };
+    // A POINTS smaller than the data silently truncated the cloud.
+    let more = match h.data {
+        Data::Ascii => loop {
+            match read_line_capped(&mut r, 1 << 24).map_err(|e| io_err(path, e))? {
+                Line::Eof => break false,
+                Line::Text(b, _) if b.iter().all(u8::is_ascii_whitespace) => continue,
+                _ => break true,
+            }
+        },
+        Data::Binary => body_len - h.points * h.record as u64 >= h.record as u64,
+        Data::Compressed => false,
+    };
+    if more {
+        return Err(body_err(
+            path,
+            "the end of the data",
+            format!(
+                "the data goes on after the {} points the header declares (is POINTS too small?)",
+                h.points
+            ),
+        ));
+    }
     if let Some((rot, t)) = h.pose {
         for p in &mut pts {
             *p = rot * *p + t;
@@ -370,8 +392,9 @@ fn read_ascii<R: io::BufRead>(
     body_len: u64,
 ) -> Result<Vec<Point3<f64>>, CloudError> {
     let values: usize = h.fields.iter().map(|f| f.count).sum();
-    // Each value takes at least one character and one separator (the last newline may lack).
-    too_big(path, h, 2 * values as u64, body_len)?;
+    // No size check: the body is read line by line to its end (preallocation is capped),
+    // and a row missing a value is reported where it is, not as a short file.
+    let _ = body_len;
     let mut out = Vec::with_capacity((h.points as usize).min(MAX_PREALLOC));
     let mut lineno = h.lines;
     while (out.len() as u64) < h.points {

@@ -435,8 +435,14 @@ pub fn read_ply(path: &Path) -> Result<Vec<Point3<f64>>, CloudError> {
     let body_len = file_len.saturating_sub(header.len);
 
     // Every element up to the vertices must fit in the body, before anything is allocated.
+    // Binary only: an ascii body is read line by line to its end, and a row missing a
+    // value is reported where it is, not as a short file.
     let mut need = 0u64;
-    for e in &header.elements[..=vi] {
+    let checked = match header.encoding {
+        Encoding::Ascii => &header.elements[..0],
+        _ => &header.elements[..=vi],
+    };
+    for e in checked {
         let row = match header.encoding {
             Encoding::Ascii => e.min_ascii_row(),
             _ => e.min_binary_row(),
@@ -461,11 +467,49 @@ pub fn read_ply(path: &Path) -> Result<Vec<Point3<f64>>, CloudError> {
         }
     }
 
+    let last = vi + 1 == header.elements.len();
+    let v = &header.elements[vi];
     match header.encoding {
-        Encoding::Ascii => read_ascii_body(path, &mut r, &header, vi, xyz),
+        Encoding::Ascii => {
+            let pts = read_ascii_body(path, &mut r, &header, vi, xyz)?;
+            if last {
+                no_more_rows(path, &mut r, v)?;
+            }
+            Ok(pts)
+        }
         enc => {
             let mut src = Src { r, pos: header.len };
-            read_binary_body(path, &mut src, &header, vi, xyz, enc == Encoding::BinaryBe)
+            let pts =
+                read_binary_body(path, &mut src, &header, vi, xyz, enc == Encoding::BinaryBe)?;
+            let left = file_len.saturating_sub(src.pos);
+            if last && left >= v.min_binary_row().max(1) {
+                return Err(more_than_declared(path, v, format!("byte {}", src.pos)));
+            }
+            Ok(pts)
+        }
+    }
+}
+
+/// The error for a body holding more rows than its header's count (a count too small
+/// silently truncated the cloud).
+fn more_than_declared(path: &Path, e: &Element, at: String) -> CloudError {
+    body_err(
+        path,
+        at,
+        format!(
+            "the data goes on after the {} '{}' elements the header declares (is the count too small?)",
+            e.count, e.name
+        ),
+    )
+}
+
+/// Fails if a non-blank line follows the last declared row of an ascii body.
+fn no_more_rows<R: BufRead>(path: &Path, r: &mut R, e: &Element) -> Result<(), CloudError> {
+    loop {
+        match read_line_capped(r, 1 << 20).map_err(|err| io_err(path, err))? {
+            Line::Eof => return Ok(()),
+            Line::Text(b, _) if b.iter().all(u8::is_ascii_whitespace) => continue,
+            _ => return Err(more_than_declared(path, e, "the end of the data".into())),
         }
     }
 }
@@ -608,13 +652,13 @@ fn read_ascii_body<R: BufRead>(
     let v = &h.elements[vi];
     for e in &h.elements[..vi] {
         for i in 0..e.count {
-            let (text, at) = line_no.next(path, r, &e.name, i)?;
+            let (text, at) = line_no.next(path, r, &e.name, (i, e.count))?;
             check_ascii_row(path, &text, e, &at)?;
         }
     }
     let mut out = Vec::with_capacity((v.count as usize).min(MAX_PREALLOC));
     for i in 0..v.count {
-        let (text, at) = line_no.next(path, r, "vertex", i)?;
+        let (text, at) = line_no.next(path, r, "vertex", (i, v.count))?;
         let toks: Vec<&str> = text.split_ascii_whitespace().collect();
         let starts = check_ascii_row(path, &text, v, &at)?;
         let mut vals = [0f64; 3];
@@ -704,14 +748,18 @@ impl AsciiLines {
         path: &Path,
         r: &mut R,
         name: &str,
-        i: u64,
+        (i, of): (u64, u64),
     ) -> Result<(String, String), CloudError> {
         loop {
             self.lineno += 1;
             let at = format!("line {}", self.lineno);
             match read_line_capped(r, 1 << 20).map_err(|e| io_err(path, e))? {
                 Line::Eof => {
-                    return Err(body_err(path, at, format!("file ends before {name} {i}")))
+                    return Err(body_err(
+                        path,
+                        at,
+                        format!("file ends before {name} {i} of the {of} the header declares"),
+                    ))
                 }
                 Line::TooLong => return Err(body_err(path, at, "line too long")),
                 Line::Text(b, _) => {

@@ -5,15 +5,23 @@
 mod common;
 
 mod batch_under_address_limit;
+mod control_bytes_in_errors;
+mod empty_inputs;
+mod eval_convert_up;
 mod fine_voxel_budget;
+mod header_count_too_small;
 mod huge_coordinates;
+mod mesh_file_size;
 mod millimetres_warn_first;
+mod misleading_messages;
 mod model_absurd_numbers;
 mod obj_nan_area_cap;
 mod off_corner_overflow;
 mod output_is_input;
 mod pcd_huge_record;
 mod per_input_name_clash;
+mod resume_keeps_run_outputs;
+mod resume_other_models;
 mod special_files_and_links;
 mod stale_temp_files;
 mod stdout_write_errors;
