@@ -119,7 +119,7 @@ pub fn guard<'a>(
     if let Some((point, value)) = cloud.points.iter().enumerate().find_map(|(i, p)| {
         p.coords
             .iter()
-            .find(|c| !(c.abs() <= cfg.max_coordinate))
+            .find(|c| !c.is_finite() || c.abs() > cfg.max_coordinate)
             .map(|&c| (i, c))
     }) {
         return Err(ExtentError::Coordinate {

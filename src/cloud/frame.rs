@@ -620,6 +620,9 @@ const UNITS_SAMPLE: usize = 10_000;
 /// Most points of one grid cell a spacing query looks at (the scan stops after 5000).
 const SPACING_SCAN: usize = 5001;
 
+/// A cell of the spacing grid.
+type Cell = (i64, i64, i64);
+
 /// Median nearest-neighbour distance of up to 200 evenly chosen of the `n` finite points
 /// (a hash grid whose cells hold a few points on a surface, filled only around the
 /// chosen points).
@@ -650,7 +653,7 @@ fn typical_spacing(cloud: &PointCloud, n: usize, diag: f64) -> Option<f64> {
         .step_by(step)
         .map(|(i, p)| (i, *p))
         .collect();
-    let mut grid: HashMap<(i64, i64, i64), Vec<(usize, Point3<f64>)>> = HashMap::new();
+    let mut grid: HashMap<Cell, Vec<(usize, Point3<f64>)>> = HashMap::new();
     for (_, q) in &queries {
         let (kx, ky, kz) = key(q);
         for dx in -1..=1 {
