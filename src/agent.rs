@@ -13,6 +13,14 @@ use serde::Deserialize;
 
 use crate::model::{parse_toml, read_text, tree_order, Key, ModelError, Source, TreeWords};
 
+/// Most joints a body model may have: a human skeleton has a few dozen; the kinematic
+/// chain is walked joint by joint on a worker thread, whose stack a chain of 100,000
+/// joints overflowed.
+pub const MAX_JOINTS: usize = 256;
+/// Furthest a joint origin or link end may be from its joint, fraction of H: ten body
+/// heights is no body, and the scene grids and drop searches grow with the body's size.
+pub const MAX_REACH: f64 = 10.0;
+
 /// One joint (a vertex of H) with its optional body part (the edge to its parent's frame).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Joint {
@@ -140,6 +148,15 @@ impl Agent {
                 format!("body height {height} m is outside 0.3-3.0 m"),
             ));
         }
+        if file.joint.len() > MAX_JOINTS {
+            return Err(src.invalid(
+                &Key::top("joint").at(MAX_JOINTS),
+                format!(
+                    "{} joints, more than the {MAX_JOINTS} a body model may have",
+                    file.joint.len()
+                ),
+            ));
+        }
         let key = |i: usize| Key::top("joint").item(i, &file.joint[i].name);
         let order = tree_order(
             src,
@@ -182,8 +199,15 @@ impl Agent {
         h: f64,
     ) -> Result<Joint, ModelError> {
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        let near = |v: &[f64]| v.iter().all(|x| x.abs() <= MAX_REACH);
         if !finite(&j.origin) {
             return Err(src.invalid(&key.key("origin"), "must be finite"));
+        }
+        if !near(&j.origin) {
+            return Err(src.invalid(
+                &key.key("origin"),
+                format!("must be within {MAX_REACH} H of the parent joint"),
+            ));
         }
         let axis = Vector3::from(j.axis);
         if !finite(&j.axis) || axis.norm() < 1e-9 {
@@ -208,6 +232,12 @@ impl Agent {
                     if !finite(v) {
                         return Err(src.invalid(&lk.key(name), "must be finite"));
                     }
+                    if !near(v) {
+                        return Err(src.invalid(
+                            &lk.key(name),
+                            format!("must be within {MAX_REACH} H of its joint"),
+                        ));
+                    }
                 }
                 let (from, to) = (Point3::from(l.from) * h, Point3::from(l.to) * h);
                 if (to - from).norm() < 1e-6 {
@@ -216,10 +246,13 @@ impl Agent {
                         format!("link `{}` has zero length (from == to)", l.name),
                     ));
                 }
-                if !(l.radius.is_finite() && l.radius > 0.0) {
+                if !(l.radius.is_finite() && l.radius > 0.0 && l.radius <= MAX_REACH) {
                     return Err(src.invalid(
                         &lk.key("radius"),
-                        format!("must be positive, not {}", l.radius),
+                        format!(
+                            "must be positive and at most {MAX_REACH} H, not {}",
+                            l.radius
+                        ),
                     ));
                 }
                 Some(Link {

@@ -24,6 +24,23 @@ pub enum BatchError {
         #[source]
         source: std::io::Error,
     },
+    /// A line of a list file is not text.
+    #[error("{path}: line {line}: not UTF-8 text")]
+    ListLine {
+        /// The list file (`-` for standard input).
+        path: PathBuf,
+        /// The line, from 1.
+        line: usize,
+    },
+    /// A folder given as input holds no cloud or mesh file.
+    #[error("{path}: no .ply, .pcd, .xyz, .obj, .off or .stl file in this folder")]
+    EmptyFolder {
+        /// The folder.
+        path: PathBuf,
+    },
+    /// The run has no input at all.
+    #[error("no input files (give files, folders or --list)")]
+    NoInputs,
     /// `--shard` is not `K/N` with `1 <= K <= N`.
     #[error("--shard {given}: {why}")]
     Shard {
@@ -78,13 +95,22 @@ pub fn read_list(path: &Path) -> Result<Vec<PathBuf>, BatchError> {
         path: path.to_path_buf(),
         source,
     };
-    if path == Path::new("-") {
-        let mut text = String::new();
-        std::io::stdin().read_to_string(&mut text).map_err(err)?;
-        return Ok(parse_list(&text, Path::new("")));
-    }
-    let text = std::fs::read_to_string(path).map_err(err)?;
-    Ok(parse_list(&text, path.parent().unwrap_or(Path::new(""))))
+    let mut bytes = Vec::new();
+    let base = if path == Path::new("-") {
+        std::io::stdin().read_to_end(&mut bytes).map_err(err)?;
+        Path::new("")
+    } else {
+        bytes = std::fs::read(path).map_err(err)?;
+        path.parent().unwrap_or(Path::new(""))
+    };
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        BatchError::ListLine {
+            path: path.to_path_buf(),
+            line: 1 + good.iter().filter(|&&b| b == b'\n').count(),
+        }
+    })?;
+    Ok(parse_list(&text, base))
 }
 
 /// The inputs of one run.
@@ -111,7 +137,15 @@ pub fn gather(
     for l in lists {
         given.extend(read_list(l)?);
     }
+    for g in &given {
+        if g.is_dir() && crate::input::expand_inputs(std::slice::from_ref(g))?.is_empty() {
+            return Err(BatchError::EmptyFolder { path: g.clone() });
+        }
+    }
     let all = crate::input::expand_inputs(&given)?;
+    if all.is_empty() {
+        return Err(BatchError::NoInputs);
+    }
     if saved {
         check_saved_names(&all)?;
     }
@@ -221,6 +255,24 @@ pub enum Status {
     Error,
     /// `--resume`: its saved output exists; not run again.
     Skipped,
+}
+
+/// `s` safe to print as one line of a terminal: control characters (newlines, NUL, the
+/// escape that starts ANSI sequences) are written as Rust escapes (`\n`, `\u{1b}`), so
+/// a file's bytes or a file name cannot split a line or drive the terminal.
+pub fn printable(s: &str) -> String {
+    if !s.chars().any(char::is_control) {
+        return s.to_string();
+    }
+    s.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 /// One line of `--log-json`: how one input ended. Fields that do not apply are left out.

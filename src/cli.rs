@@ -59,7 +59,7 @@ struct SynthArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Scenes of each kind: full models, single views, objects against a wall, rooms.
-    #[arg(long, num_args = 4, value_names = ["FULL", "VIEW", "WALL", "ROOM"])]
+    #[arg(long, num_args = 4, value_names = ["FULL", "VIEW", "WALL", "ROOM"], value_parser = parse_count)]
     count: Option<Vec<usize>>,
     /// Render depth views of these triangle-mesh PLY files instead of furniture.
     #[arg(long, num_args = 1..)]
@@ -138,7 +138,7 @@ impl ModelArgs {
 #[derive(clap::Args)]
 struct InputArgs {
     /// The axis that points up in the file: x, y, z, -x, -y, -z.
-    #[arg(long, default_value = "z")]
+    #[arg(long, default_value = "z", allow_hyphen_values = true)]
     up: Up,
     /// The file is a depth-camera frame (x right, y down, z forward); implies --up -y.
     #[arg(long)]
@@ -168,7 +168,19 @@ impl InputArgs {
                 } else {
                     t.clone()
                 };
-                Some(parse_matrix(&text).map_err(|e| format!("--transform {t}: {e}"))?)
+                Some(parse_matrix(&text).map_err(|e| {
+                    // Not 16 numbers and no such file: most likely a mistyped file name.
+                    let numeric = t.chars().any(|c| c.is_ascii_digit())
+                        && t.split(|c: char| c.is_whitespace() || ",;[]".contains(c))
+                            .filter(|w| !w.is_empty())
+                            .count()
+                            > 1;
+                    if numeric {
+                        format!("--transform {t}: {e}")
+                    } else {
+                        format!("--transform {t}: no such file, and not a matrix of 16 numbers")
+                    }
+                })?)
             }
         };
         if let Some(d) = self.sample {
@@ -266,8 +278,8 @@ struct DetectArgs {
     /// Write the posed agents as a coloured triangle mesh (PLY).
     #[arg(long)]
     mesh: Option<PathBuf>,
-    /// Worker threads (default: all cores); the output does not depend on it.
-    #[arg(long)]
+    /// Worker threads, 1 to 256 (default: all cores); the output does not depend on it.
+    #[arg(long, value_parser = parse_threads)]
     threads: Option<usize>,
     /// No progress bar (there is none either when stderr is not a terminal).
     #[arg(long, short)]
@@ -289,6 +301,30 @@ fn parse_height(s: &str) -> Result<f64, String> {
         Err(format!(
             "body height {h} m is outside 0.3-3.0 m (metres, not centimetres?)"
         ))
+    }
+}
+
+/// Most worker threads: far more than the cores of any machine this runs on; more only
+/// spends time starting threads (100,000 took 72 s before the first file).
+pub const MAX_THREADS: usize = 256;
+
+fn parse_threads(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if (1..=MAX_THREADS).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "'{s}' is not a thread count from 1 to {MAX_THREADS}"
+        )),
+    }
+}
+
+/// Most synthetic scenes of one kind: a run of this many takes days; more is a typo, and
+/// the scene plan is allocated up front (1e8 asked for 12 GB).
+pub const MAX_SCENES: usize = 100_000;
+
+fn parse_count(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if n <= MAX_SCENES => Ok(n),
+        _ => Err(format!("'{s}' is not a scene count from 0 to {MAX_SCENES}")),
     }
 }
 

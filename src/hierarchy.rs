@@ -335,6 +335,7 @@ impl Hierarchy {
 
     fn resolve(file: File, src: Source, agent: &Agent) -> Result<Hierarchy, ModelError> {
         check_numbers(&file, src)?;
+        check_limits(&file, src)?;
         let names = Names { src, agent };
         let mut initial = agent.rest_posture();
         for (name, deg) in &file.initial_pose {
@@ -437,6 +438,78 @@ impl Bound {
             Bound::Fraction => format!("must be between 0 and 1, not {v}"),
         }
     }
+}
+
+/// The largest (or smallest) values the hypothesis and fit numbers may take: beyond them
+/// the work grows without bound (template cells with the square of the diameter, samples
+/// with 1 / spacing, drop steps with the clearance) and no body is described any more.
+/// Each entry: key, value, least, most, reason.
+fn check_limits(file: &File, src: Source) -> Result<(), ModelError> {
+    let (hyp, fit) = (Key::top("hypothesis"), Key::top("fit"));
+    let (h, f) = (&file.hypothesis, &file.fit);
+    for (key, v, lo, hi, why) in [
+        (
+            hyp.key("template_diameter"),
+            h.template_diameter,
+            0.0,
+            2.0,
+            "fraction of H: a template wider than two bodies holds no place a body rests on",
+        ),
+        (
+            hyp.key("gradient_radius"),
+            h.gradient_radius,
+            0.0,
+            2.0,
+            "fraction of H: a neighbourhood beyond two bodies is no longer the seat's",
+        ),
+        (
+            hyp.key("spacing"),
+            h.spacing.unwrap_or(0.1),
+            0.0,
+            2.0,
+            "fraction of H: places further apart than two bodies miss whole seats",
+        ),
+        (
+            Key::top("suppression_radius"),
+            file.suppression_radius,
+            0.0,
+            10.0,
+            "fraction of H: beyond ten bodies one detection would hide a whole building",
+        ),
+        (
+            fit.key("start_clearance"),
+            f.start_clearance,
+            0.0,
+            2.0,
+            "metres: the body starts just above the seat; the drop search grows with it",
+        ),
+        (
+            fit.key("max_drop"),
+            f.max_drop,
+            0.0,
+            3.0,
+            "metres: further below a seat than a room is high is no support",
+        ),
+        (
+            fit.key("sample_spacing"),
+            f.sample_spacing,
+            0.001,
+            1.0,
+            "metres: under 1 mm (a fifth of the 5 mm contact step) adds samples, not accuracy",
+        ),
+        (
+            fit.key("fallback_yaw_step"),
+            f.fallback_yaw_step,
+            0.5,
+            360.0,
+            "degrees: finer than half a degree (720 headings) only multiplies the fits",
+        ),
+    ] {
+        if !(lo..=hi).contains(&v) {
+            return Err(src.invalid(&key, format!("{v} is outside {lo}-{hi} ({why})")));
+        }
+    }
+    Ok(())
 }
 
 /// Checks the numbers of the hypothesis, fit and score sections.

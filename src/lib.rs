@@ -11,11 +11,13 @@
 
 pub mod agent;
 pub mod agent_mesh;
+pub mod atomic;
 pub mod batch;
 pub mod cli;
 pub mod cloud;
 pub mod detect;
 pub mod eval;
+pub mod extent;
 pub mod fit;
 pub mod fuzzy;
 pub mod heightmap;

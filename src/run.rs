@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use crate::agent::Agent;
 use crate::batch::{self, LogLine, Shard, Status};
 use crate::cloud;
-use crate::detect::{detect_all, DetectConfig};
+use crate::detect::{detect_all_prepared, prepare, DetectConfig};
+use crate::extent::{guard, ExtentConfig, ExtentError};
 use crate::hierarchy::Hierarchy;
 use crate::input::{load_input, Input, InputOptions};
 use crate::model::ModelError;
@@ -109,7 +110,7 @@ pub fn detect_file(
     path: &Path,
     models: &[Model],
     cfg: &DetectConfig,
-) -> Result<FileReport, cloud::CloudError> {
+) -> Result<FileReport, FileError> {
     let loaded = cloud::load(path)?;
     Ok(report_of(
         path,
@@ -117,23 +118,38 @@ pub fn detect_file(
         loaded.dropped_non_finite,
         models,
         cfg,
-    ))
+    )?)
 }
 
+/// Why one file gave no report.
+#[derive(Debug, thiserror::Error)]
+pub enum FileError {
+    /// It could not be read.
+    #[error(transparent)]
+    Cloud(#[from] cloud::CloudError),
+    /// Its extent or coordinates are refused before the grids ([`crate::extent`]).
+    #[error(transparent)]
+    Extent(#[from] ExtentError),
+}
+
+/// Detection on one cloud: the grids are built from the points [`crate::extent::guard`]
+/// keeps; the segments and the report cover every point of `cloud`.
 fn report_of(
     path: &Path,
     cloud: &cloud::PointCloud,
     dropped: usize,
     models: &[Model],
     cfg: &DetectConfig,
-) -> FileReport {
-    FileReport::new(
+) -> Result<FileReport, ExtentError> {
+    let kept = guard(path, cloud, cfg, &ExtentConfig::default())?;
+    let prepared = prepare(&kept.cloud, cfg);
+    Ok(FileReport::new(
         path.display().to_string(),
         cloud.len(),
         dropped,
         models,
-        detect_all(cloud, models, cfg),
-    )
+        detect_all_prepared(cloud, &prepared, models, cfg),
+    ))
 }
 
 /// Where a per-input output of `input` goes: `base` itself for a single input, otherwise
@@ -168,14 +184,14 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     let models = match req.models.load() {
         Ok(m) => m,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
     let inputs = match batch::gather(&req.files, &req.lists, req.shard, req.out_dir.is_some()) {
         Ok(i) => i,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
@@ -187,6 +203,12 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     }
     let files = &inputs.files;
     let several = inputs.total > 1;
+    if let Err(e) = check_outputs(req, files, several) {
+        let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
+        return 2;
+    }
+    // The first error writing standard output (a full disk, a closed pipe): reported at the end.
+    let mut out_error: Option<std::io::Error> = None;
     let bar = if req.progress && files.len() > 1 {
         let bar = indicatif::ProgressBar::new(files.len() as u64);
         if let Ok(style) =
@@ -220,23 +242,38 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             affordances: None,
             seconds: None,
         };
-        let done = if req.resume && saved.as_ref().is_some_and(|s| s.exists()) {
-            skipped += 1;
-            None
+        let resumed = saved.as_deref().filter(|s| req.resume && s.exists());
+        let done = if let Some(s) = resumed {
+            match check_saved_models(s, &models) {
+                Ok(()) => {
+                    skipped += 1;
+                    None
+                }
+                Err(e) => Some(Done {
+                    report: None,
+                    errors: vec![batch::printable(&e)],
+                }),
+            }
         } else {
             let start = std::time::Instant::now();
-            let done = detect_one(req, &models, path, several, saved.as_deref());
+            let done = detect_one(req, &models, path, several, saved.as_deref(), &mut |n| {
+                // Warnings (units above all) go out before detection, which may take long.
+                bar.suspend(|| {
+                    let _ = err.write_all(n);
+                })
+            });
             line.seconds = Some((start.elapsed().as_secs_f64() * 1000.0).round() / 1000.0);
             Some(done)
         };
         bar.suspend(|| {
             let Some(done) = &done else { return };
-            let _ = err.write_all(&done.notes);
             for e in &done.errors {
-                let _ = writeln!(err, "error: {e}");
+                let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             }
             if let (true, Some(r)) = (table, &done.report) {
-                let _ = out.write_all(report::to_table(r).as_bytes());
+                if let Err(e) = out.write_all(report::to_table(r).as_bytes()) {
+                    out_error.get_or_insert(e);
+                }
             }
         });
         if let Some(done) = done {
@@ -255,9 +292,13 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             }
         }
         if req.log_json {
-            let _ = bar.suspend(|| writeln!(out, "{}", line.to_json()));
+            if let Err(e) = bar.suspend(|| writeln!(out, "{}", line.to_json())) {
+                out_error.get_or_insert(e);
+            }
         }
-        let _ = out.flush();
+        if let Err(e) = out.flush() {
+            out_error.get_or_insert(e);
+        }
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -273,9 +314,28 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             }
         }
     };
-    write(&req.json, Ok(report::to_json(&reports)));
-    write(&req.csv, report::to_csv(&reports));
-    write(&req.summary, report::to_summary(&reports));
+    if skipped > 0 {
+        // The skipped inputs have no report in this run: writing the run-wide outputs
+        // would replace a complete run's with a part of it (or with nothing).
+        for (flag, target) in [
+            ("--json", &req.json),
+            ("--csv", &req.csv),
+            ("--summary", &req.summary),
+        ] {
+            if let Some(p) = target {
+                let _ = writeln!(
+                    err,
+                    "note: {flag} {}: not written, {skipped} inputs were skipped by --resume \
+                     (their results are in --out-dir; `afford eval --from` reads them)",
+                    p.display()
+                );
+            }
+        }
+    } else {
+        write(&req.json, Ok(report::to_json(&reports)));
+        write(&req.csv, report::to_csv(&reports));
+        write(&req.summary, report::to_summary(&reports));
+    }
     if several || req.shard.is_some() {
         let mut s = match req.shard {
             Some(k) => format!("shard {k}: {} of {} files", files.len(), inputs.total),
@@ -287,6 +347,10 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
         }
         let _ = writeln!(err, "{s}");
     }
+    if let Some(e) = &out_error {
+        let _ = writeln!(err, "error: standard output: cannot write: {e}");
+        unwritten += 1;
+    }
     if failed + unwritten > 0 {
         2
     } else {
@@ -294,11 +358,96 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     }
 }
 
-/// What one input gave: its report (when it could be read), its notes for stderr, and
-/// the errors of reading it or writing its per-file outputs.
+/// Checks that the saved result `saved` (an `--out-dir` JSON) was made with the bodies and
+/// hierarchies of this run, so that `--resume` does not mix models in one folder.
+fn check_saved_models(saved: &Path, models: &[Model]) -> Result<(), String> {
+    let key =
+        |agent: &str, height: f64, hierarchy: &str| format!("{agent} {height:.3} m {hierarchy}");
+    let mut want: Vec<String> = models
+        .iter()
+        .map(|m| key(&m.agent.name, m.agent.height, &m.hierarchy.name))
+        .collect();
+    let bad = |what: String| format!("{}: {what}", saved.display());
+    let text = std::fs::read_to_string(saved).map_err(|e| bad(format!("cannot read: {e}")))?;
+    let doc: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| bad(format!("not a saved result: {e}")))?;
+    let runs = doc["files"][0]["runs"]
+        .as_array()
+        .ok_or_else(|| bad("not a saved result: no runs".into()))?;
+    let mut got: Vec<String> = runs
+        .iter()
+        .map(|r| {
+            key(
+                r["agent"].as_str().unwrap_or("?"),
+                r["height"].as_f64().unwrap_or(f64::NAN),
+                r["hierarchy"].as_str().unwrap_or("?"),
+            )
+        })
+        .collect();
+    want.sort();
+    got.sort();
+    if got != want {
+        return Err(bad(format!(
+            "saved with other models ({}) than this run ({}); use another --out-dir or remove it",
+            got.join(", "),
+            want.join(", ")
+        )));
+    }
+    Ok(())
+}
+
+/// Refuses outputs that would destroy an input or each other: an output (`--json`,
+/// `--csv`, `--summary`, or the per-input `--segments`/`--mesh` file of any input) that is
+/// one of the inputs, and two inputs whose per-input outputs share a name
+/// ([`per_input_path`] uses the file stem: `a/chair.ply` and `b/chair.pcd` clash).
+fn check_outputs(req: &DetectRequest, files: &[PathBuf], several: bool) -> Result<(), String> {
+    let mut targets: Vec<(&str, PathBuf)> = Vec::new();
+    for (flag, p) in [
+        ("--json", &req.json),
+        ("--csv", &req.csv),
+        ("--summary", &req.summary),
+    ] {
+        if let Some(p) = p {
+            targets.push((flag, p.clone()));
+        }
+    }
+    for (flag, base) in [("--segments", &req.segments), ("--mesh", &req.mesh)] {
+        if let Some(base) = base {
+            let mut seen: std::collections::BTreeMap<PathBuf, &Path> = Default::default();
+            for f in files {
+                let t = per_input_path(base, f, several);
+                if let Some(first) = seen.insert(t.clone(), f) {
+                    return Err(format!(
+                        "{flag}: {} and {} would both be written to {}",
+                        first.display(),
+                        f.display(),
+                        t.display()
+                    ));
+                }
+                targets.push((flag, t));
+            }
+        }
+    }
+    let inputs: std::collections::HashMap<PathBuf, &PathBuf> = files
+        .iter()
+        .filter_map(|f| std::fs::canonicalize(f).ok().map(|c| (c, f)))
+        .collect();
+    for (flag, t) in &targets {
+        if let Some(f) = std::fs::canonicalize(t).ok().and_then(|c| inputs.get(&c)) {
+            return Err(format!(
+                "{flag} {}: is the input {}; refusing to replace it",
+                t.display(),
+                f.display()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// What one input gave: its report (when it could be read), and the errors of reading it
+/// or writing its per-file outputs.
 struct Done {
     report: Option<FileReport>,
-    notes: Vec<u8>,
     errors: Vec<String>,
 }
 
@@ -310,45 +459,61 @@ fn detect_one(
     path: &Path,
     several: bool,
     saved: Option<&Path>,
+    warn: &mut dyn FnMut(&[u8]),
 ) -> Done {
     let mut done = Done {
         report: None,
-        notes: Vec::new(),
         errors: Vec::new(),
     };
     let input = match load_input(path, &req.input) {
         Ok(i) => i,
         Err(e) => {
-            done.errors.push(e.to_string());
+            done.errors.push(batch::printable(&e.to_string()));
             return done;
         }
     };
-    notes(&input, path, &mut done.notes);
-    let r = report_of(
+    let mut notes_text = Vec::new();
+    notes(&input, path, &mut notes_text);
+    let notes_text: String = String::from_utf8_lossy(&notes_text)
+        .lines()
+        .map(|l| batch::printable(l) + "\n")
+        .collect();
+    warn(notes_text.as_bytes());
+    let r = match report_of(
         path,
         &input.cloud,
         input.dropped_non_finite,
         models,
         &req.config,
-    );
+    ) {
+        Ok(r) => r,
+        Err(e) => {
+            done.errors.push(batch::printable(&e.to_string()));
+            return done;
+        }
+    };
     if let Some(base) = &req.segments {
         let target = per_input_path(base, path, several);
         if let Err(e) = write_segments(&input, &target, &r) {
-            done.errors.push(e.to_string());
+            done.errors.push(batch::printable(&e.to_string()));
         }
     }
     if let Some(base) = &req.mesh {
         let target = per_input_path(base, path, several);
         if let Err(e) = crate::agent_mesh::agent_mesh_ply(&r.detections, &target) {
-            done.errors
-                .push(format!("{}: cannot write: {e}", target.display()));
+            done.errors.push(batch::printable(&format!(
+                "{}: cannot write: {e}",
+                target.display()
+            )));
         }
     }
     if let (Some(target), true) = (saved, done.errors.is_empty()) {
         let json = report::to_json(std::slice::from_ref(&r));
         if let Err(e) = report::write_atomic(target, json.as_bytes()) {
-            done.errors
-                .push(format!("{}: cannot write: {e}", target.display()));
+            done.errors.push(batch::printable(&format!(
+                "{}: cannot write: {e}",
+                target.display()
+            )));
         }
     }
     done.report = Some(r);
@@ -406,19 +571,31 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
     let models = match req.models.load() {
         Ok(m) => m,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
     let loaded = match load_input(&req.file, &req.input) {
         Ok(l) => l,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
     notes(&loaded, &req.file, err);
-    let prepared = crate::detect::prepare(&loaded.cloud, &req.config);
+    let kept = match guard(
+        &req.file,
+        &loaded.cloud,
+        &req.config,
+        &ExtentConfig::default(),
+    ) {
+        Ok(k) => k,
+        Err(e) => {
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
+            return 2;
+        }
+    };
+    let prepared = prepare(&kept.cloud, &req.config);
     let hyps = models
         .first()
         .map(|m| {
@@ -497,7 +674,7 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
                 0
             }
             Err(e) => {
-                let _ = writeln!(err, "error: {e}");
+                let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
                 2
             }
         };
@@ -512,7 +689,7 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
                     }
                 }
                 Err(e) => {
-                    let _ = writeln!(err, "error: {e}");
+                    let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
                     failed += 1;
                 }
             }
@@ -542,7 +719,7 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
             0
         }
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             2
         }
     }
@@ -583,7 +760,7 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
     let (agents, hierarchies) = match choice.sources() {
         Ok(s) => s,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
@@ -608,7 +785,7 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
     let ev = match ev {
         Ok(ev) => ev,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
@@ -621,6 +798,13 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
                 code = 2;
             }
         }
+    }
+    for (file, why) in &ev.failed {
+        let _ = writeln!(
+            err,
+            "error: {}",
+            batch::printable(&format!("{file}: {why}"))
+        );
     }
     if !ev.failed.is_empty() {
         code = 2;
@@ -644,10 +828,18 @@ pub struct ConvertRequest {
 /// Runs `afford convert`: reads any input the detector reads (with the same frame options)
 /// and writes it as PLY (binary or ascii) or binary PCD, in metres, z up, floor at z = 0.
 pub fn run_convert(req: &ConvertRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    if crate::atomic::same_file(&req.input, &req.output) {
+        let _ = writeln!(
+            err,
+            "error: {}: is the input; refusing to replace it",
+            req.output.display()
+        );
+        return 2;
+    }
     let input = match load_input(&req.input, &req.options) {
         Ok(i) => i,
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
@@ -657,6 +849,24 @@ pub fn run_convert(req: &ConvertRequest, out: &mut dyn Write, err: &mut dyn Writ
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
+    // Both formats hold 32-bit floats: a finite coordinate beyond their range would be
+    // written as infinity.
+    let limit = f64::from(f32::MAX);
+    if let Some((i, c)) = input
+        .cloud
+        .points
+        .iter()
+        .enumerate()
+        .find_map(|(i, p)| p.coords.iter().find(|c| c.abs() > limit).map(|&c| (i, c)))
+    {
+        let _ = writeln!(
+            err,
+            "error: {}: point {i}: coordinate {c:.3e} does not fit the 32-bit floats of {}",
+            req.input.display(),
+            req.output.display()
+        );
+        return 2;
+    }
     let written = match ext.as_deref() {
         Some("ply") => cloud::write_ply_points(&req.output, &input.cloud.points, &[], !req.ascii),
         Some("pcd") if !req.ascii => cloud::write_pcd(&req.output, &input.cloud.points),
@@ -684,7 +894,7 @@ pub fn run_convert(req: &ConvertRequest, out: &mut dyn Write, err: &mut dyn Writ
             0
         }
         Err(e) => {
-            let _ = writeln!(err, "error: {e}");
+            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             2
         }
     }

@@ -595,13 +595,31 @@ fn find_floor(
 /// A warning when the cloud's extent and point spacing say it is not in metres
 /// (millimetres: bounding-box diagonal over 100 units with points at least 1 unit apart;
 /// centimetres: over 20 units with points at least 0.2 apart), or `None`.
+///
+/// The extent is that of the central 98 % of up to [`UNITS_SAMPLE`] evenly chosen points
+/// along each axis, so that a stray point does not make a room look like millimetres; the
+/// spacing is measured at up to 200 points. Memory does not grow with the cloud beyond
+/// the points near those 200.
 pub fn check_units(cloud: &PointCloud) -> Option<String> {
-    let (lo, hi) = cloud.bounds()?;
-    let diag = (hi - lo).norm();
-    if !diag.is_finite() || cloud.len() < 10 {
+    let finite = |p: &&Point3<f64>| p.coords.iter().all(|c| c.is_finite());
+    let n = cloud.points.iter().filter(finite).count();
+    if n < 10 {
         return None;
     }
-    let spacing = typical_spacing(cloud, diag)?;
+    let step = n.div_ceil(UNITS_SAMPLE);
+    let sample: Vec<&Point3<f64>> = cloud.points.iter().filter(finite).step_by(step).collect();
+    let trim = sample.len() / 100;
+    let mut span = Vector3::zeros();
+    for a in 0..3 {
+        let mut v: Vec<f64> = sample.iter().map(|p| p[a]).collect();
+        v.sort_by(f64::total_cmp);
+        span[a] = v[v.len() - 1 - trim] - v[trim];
+    }
+    let diag = span.norm();
+    if !diag.is_finite() {
+        return None;
+    }
+    let spacing = typical_spacing(cloud, n, diag)?;
     if diag > 100.0 && spacing >= 1.0 {
         Some(format!(
             "the cloud is {diag:.0} units across with points about {spacing:.2} apart: it \
@@ -621,18 +639,23 @@ pub fn check_units(cloud: &PointCloud) -> Option<String> {
     }
 }
 
-/// Median nearest-neighbour distance of up to 200 evenly chosen points (a hash grid
-/// whose cells hold a few points on a surface).
-fn typical_spacing(cloud: &PointCloud, diag: f64) -> Option<f64> {
-    let pts: Vec<&Point3<f64>> = cloud
-        .points
-        .iter()
-        .filter(|p| p.coords.iter().all(|c| c.is_finite()))
-        .collect();
-    if pts.len() < 2 {
+/// Most points whose coordinates [`check_units`] sorts to measure the extent: enough
+/// for the 1 % and 99 % quantiles to be within a few per cent of the cloud's.
+const UNITS_SAMPLE: usize = 10_000;
+/// Most points of one grid cell a spacing query looks at (the scan stops after 5000).
+const SPACING_SCAN: usize = 5001;
+
+/// A cell of the spacing grid.
+type Cell = (i64, i64, i64);
+
+/// Median nearest-neighbour distance of up to 200 evenly chosen of the `n` finite points
+/// (a hash grid whose cells hold a few points on a surface, filled only around the
+/// chosen points).
+fn typical_spacing(cloud: &PointCloud, n: usize, diag: f64) -> Option<f64> {
+    if n < 2 {
         return None;
     }
-    let cell = (2.0 * diag / (pts.len() as f64).sqrt()).max(diag * 1e-9);
+    let cell = (2.0 * diag / (n as f64).sqrt()).max(diag * 1e-9);
     if cell <= 0.0 {
         return None;
     }
@@ -643,28 +666,62 @@ fn typical_spacing(cloud: &PointCloud, diag: f64) -> Option<f64> {
             (p.z / cell).floor() as i64,
         )
     };
-    let mut grid: HashMap<(i64, i64, i64), Vec<u32>> = HashMap::new();
-    for (i, p) in pts.iter().enumerate() {
-        grid.entry(key(p)).or_default().push(i as u32);
+    let pts = || {
+        cloud
+            .points
+            .iter()
+            .filter(|p| p.coords.iter().all(|c| c.is_finite()))
+    };
+    let step = n.div_ceil(200);
+    let queries: Vec<(usize, Point3<f64>)> = pts()
+        .enumerate()
+        .step_by(step)
+        .map(|(i, p)| (i, *p))
+        .collect();
+    let mut grid: HashMap<Cell, Vec<(usize, Point3<f64>)>> = HashMap::new();
+    for (_, q) in &queries {
+        let (kx, ky, kz) = key(q);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    grid.entry((
+                        kx.saturating_add(dx),
+                        ky.saturating_add(dy),
+                        kz.saturating_add(dz),
+                    ))
+                    .or_default();
+                }
+            }
+        }
     }
-    let step = pts.len().div_ceil(200);
+    for (i, p) in pts().enumerate() {
+        if let Some(list) = grid.get_mut(&key(p)) {
+            if list.len() < SPACING_SCAN {
+                list.push((i, *p));
+            }
+        }
+    }
     let mut dists: Vec<f64> = Vec::new();
-    for qi in (0..pts.len()).step_by(step) {
-        let q = pts[qi];
+    for (qi, q) in &queries {
         let (kx, ky, kz) = key(q);
         let mut best = f64::INFINITY;
         let mut scanned = 0usize;
         'cells: for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
-                    let Some(list) = grid.get(&(kx + dx, ky + dy, kz + dz)) else {
+                    let k = (
+                        kx.saturating_add(dx),
+                        ky.saturating_add(dy),
+                        kz.saturating_add(dz),
+                    );
+                    let Some(list) = grid.get(&k) else {
                         continue;
                     };
-                    for &j in list {
-                        if j as usize == qi {
+                    for (j, p) in list {
+                        if j == qi {
                             continue;
                         }
-                        let d = (pts[j as usize] - q).norm();
+                        let d = (p - q).norm();
                         if d < best {
                             best = d;
                         }

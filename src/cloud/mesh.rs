@@ -12,6 +12,8 @@ use std::path::Path;
 
 use nalgebra::Point3;
 
+use std::borrow::Cow;
+
 use super::{CloudError, PointCloud};
 use crate::synth::meshio::{read_mesh_ply, MeshError};
 use crate::synth::{sample_surface, Mesh, Part};
@@ -81,21 +83,80 @@ pub fn read_ply_mesh(path: &Path) -> Result<Mesh, CloudError> {
 /// the density times 1e-6), without noise: the same mesh, density and seed give the same
 /// points. The expected count is `mesh.area() * points_per_m2`, capped at
 /// [`MAX_SAMPLES`]. Coordinates are those of the mesh.
+///
+/// Triangles whose area is not finite (corners near 1e200 overflow the cross product)
+/// are left out: with them the total area was NaN, the cap test false, and a cap-sized
+/// mesh beside them was sampled without limit.
 pub fn sample_mesh(mesh: &Mesh, points_per_m2: f64, seed: u64) -> PointCloud {
+    let kept = finite_triangles(mesh);
+    sample_surface(&kept, capped_density(&kept, points_per_m2), 0.0, seed).0
+}
+
+/// The number of points [`sample_mesh`] draws from `mesh` at `points_per_m2`, in
+/// expectation: at most [`MAX_SAMPLES`], whatever the mesh.
+pub fn expected_samples(mesh: &Mesh, points_per_m2: f64) -> f64 {
+    let kept = finite_triangles(mesh);
+    kept.area() * capped_density(&kept, points_per_m2)
+}
+
+/// `mesh` without its triangles of non-finite area (borrowed when it has none).
+fn finite_triangles(mesh: &Mesh) -> Cow<'_, Mesh> {
+    let finite = |i: &usize| mesh.triangle_area(*i).is_finite();
+    if (0..mesh.triangles.len()).all(|i| finite(&i)) {
+        return Cow::Borrowed(mesh);
+    }
+    let keep: Vec<usize> = (0..mesh.triangles.len()).filter(finite).collect();
+    Cow::Owned(Mesh {
+        vertices: mesh.vertices.clone(),
+        triangles: keep.iter().map(|&i| mesh.triangles[i]).collect(),
+        parts: keep.iter().map(|&i| mesh.parts[i]).collect(),
+    })
+}
+
+/// `points_per_m2`, lowered so that the finite-area `mesh` gets at most [`MAX_SAMPLES`].
+fn capped_density(mesh: &Mesh, points_per_m2: f64) -> f64 {
     let area = mesh.area();
-    let density = if area > 0.0 && area * points_per_m2 > MAX_SAMPLES {
+    if area > 0.0 && area * points_per_m2 > MAX_SAMPLES {
         MAX_SAMPLES / area
     } else {
         points_per_m2
-    };
-    sample_surface(mesh, density, 0.0, seed).0
+    }
 }
 
+/// Largest mesh file read, bytes: the readers hold the whole file, and 1 GiB is a binary
+/// STL of 21 million triangles (sampled at the default density, far beyond the point cap).
+pub const MAX_MESH_BYTES: u64 = 1 << 30;
+
+/// Reads the whole file, refusing more than [`MAX_MESH_BYTES`] (also from endless
+/// sources such as `/dev/zero`, which have no size to check first).
 fn read_bytes(path: &Path) -> Result<Vec<u8>, CloudError> {
-    std::fs::read(path).map_err(|source| CloudError::Io {
+    use std::io::Read;
+    let io = |source| CloudError::Io {
         path: path.to_path_buf(),
         source,
-    })
+    };
+    super::regular_file(path)?;
+    let mut f = std::fs::File::open(path).map_err(io)?;
+    let len = f.metadata().map_err(io)?.len();
+    let too_big = || {
+        header_err(
+            path,
+            "file size".into(),
+            format!("a mesh of more than {MAX_MESH_BYTES} bytes is not read (convert it to a cloud first)"),
+        )
+    };
+    if len > MAX_MESH_BYTES {
+        return Err(too_big());
+    }
+    let mut bytes = Vec::with_capacity(len as usize);
+    f.by_ref()
+        .take(MAX_MESH_BYTES)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 == MAX_MESH_BYTES && f.read(&mut [0u8; 1]).map_err(io)? > 0 {
+        return Err(too_big());
+    }
+    Ok(bytes)
 }
 
 fn header_err(path: &Path, at: String, what: String) -> CloudError {
@@ -353,7 +414,8 @@ fn parse_off(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
         let n: usize = toks[0]
             .parse()
             .map_err(|_| body_err(path, at(), format!("'{}' is not a corner count", toks[0])))?;
-        if n < 3 || toks.len() < n + 1 {
+        // `n >= toks.len()`, not `toks.len() < n + 1`: a count of 2^64 - 1 must not overflow.
+        if n < 3 || n >= toks.len() {
             return Err(body_err(
                 path,
                 at(),

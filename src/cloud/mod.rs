@@ -17,7 +17,7 @@ pub use frame::{
     check_units, parse_matrix, to_world, FloorMode, FrameError, FrameOptions, FrameReport, Units,
     Up,
 };
-pub use mesh::{read_mesh, sample_mesh};
+pub use mesh::{expected_samples, read_mesh, sample_mesh, MAX_SAMPLES};
 pub use pcd::{read_pcd, write_pcd};
 pub use ply::{read_ply, read_ply_property, write_ply_points};
 pub(crate) use ply::{write_ply_typed, Scalar};
@@ -52,6 +52,24 @@ pub enum CloudError {
         #[source]
         source: std::io::Error,
     },
+    /// The file could not be written.
+    #[error("{path}: cannot write: {source}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The path is not a regular file (a FIFO, a device, a socket): the readers check
+    /// every count against the file's size, which such files do not have.
+    #[error("{path}: not a regular file ({what}); give a file")]
+    NotAFile {
+        /// The file.
+        path: PathBuf,
+        /// What it is.
+        what: &'static str,
+    },
     /// The header is malformed; `at` says where (line or byte).
     #[error("{path}: bad header at {at}: {what}")]
     Header {
@@ -73,7 +91,10 @@ pub enum CloudError {
         what: String,
     },
     /// The file's extension names no format this tool reads.
-    #[error("{path}: unknown point cloud format (expected .ply, .pcd, .xyz, .txt or .csv)")]
+    #[error(
+        "{path}: unknown point cloud format (expected .ply, .pcd, .xyz, .txt or .csv, or a \
+         mesh: .obj, .off or .stl)"
+    )]
     UnknownFormat {
         /// The file.
         path: PathBuf,
@@ -84,6 +105,7 @@ pub enum CloudError {
 ///
 /// Points with a non-finite coordinate are dropped and counted in [`LoadedCloud::dropped_non_finite`].
 pub fn load(path: &Path) -> Result<LoadedCloud, CloudError> {
+    regular_file(path)?;
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -100,6 +122,33 @@ pub fn load(path: &Path) -> Result<LoadedCloud, CloudError> {
         }
     };
     Ok(keep_finite(raw))
+}
+
+/// Fails unless `path` is a regular file (after links). A missing file passes: opening it
+/// gives the error that says so.
+pub fn regular_file(path: &Path) -> Result<(), CloudError> {
+    use std::os::unix::fs::FileTypeExt;
+    let Ok(m) = std::fs::metadata(path) else {
+        return Ok(());
+    };
+    let t = m.file_type();
+    let what = if t.is_file() {
+        return Ok(());
+    } else if t.is_dir() {
+        "a folder"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_char_device() || t.is_block_device() {
+        "a device"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "not a file"
+    };
+    Err(CloudError::NotAFile {
+        path: path.to_path_buf(),
+        what,
+    })
 }
 
 /// Splits raw points into the finite ones and a count of the rest.

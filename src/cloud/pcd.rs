@@ -17,6 +17,10 @@ use super::CloudError;
 
 /// Largest output one LZF input byte can produce (a 3-byte back reference yields 264 bytes).
 const LZF_MAX_RATIO: u64 = 88;
+/// Most bytes one point's record may take: one field of the largest COUNT (1048576) of
+/// 8 bytes and as much again; real clouds take a few dozen bytes. The record buffer is
+/// allocated before any point is read, so this bounds what a header alone can ask for.
+const MAX_RECORD: usize = 16 << 20;
 
 /// One field of a PCD record.
 #[derive(Debug, Clone)]
@@ -268,6 +272,16 @@ fn parse_header<R: io::BufRead>(path: &Path, r: &mut R) -> Result<Header, CloudE
     }
     // At most 64 KiB / 2 fields of at most 8 MiB each: cannot overflow.
     let record: usize = fields.iter().map(Field::bytes).sum();
+    if record > MAX_RECORD {
+        return Err(header_err(
+            path,
+            format!("line {}", counts.1),
+            format!(
+                "one point takes {record} bytes (SIZE x COUNT over all fields), more than the \
+                 {MAX_RECORD} this reader accepts"
+            ),
+        ));
+    }
 
     let mut xyz = [(0, 0, 0); 3];
     for (k, name) in ["x", "y", "z"].iter().enumerate() {
@@ -323,6 +337,28 @@ pub fn read_pcd(path: &Path) -> Result<Vec<Point3<f64>>, CloudError> {
         Data::Binary => read_binary(path, &mut r, &h, body_len)?,
         Data::Compressed => read_compressed(path, &mut r, &h, body_len)?,
     };
+    // A POINTS smaller than the data silently truncated the cloud.
+    let more = match h.data {
+        Data::Ascii => loop {
+            match read_line_capped(&mut r, 1 << 24).map_err(|e| io_err(path, e))? {
+                Line::Eof => break false,
+                Line::Text(b, _) if b.iter().all(u8::is_ascii_whitespace) => continue,
+                _ => break true,
+            }
+        },
+        Data::Binary => body_len - h.points * h.record as u64 >= h.record as u64,
+        Data::Compressed => false,
+    };
+    if more {
+        return Err(body_err(
+            path,
+            "the end of the data",
+            format!(
+                "the data goes on after the {} points the header declares (is POINTS too small?)",
+                h.points
+            ),
+        ));
+    }
     if let Some((rot, t)) = h.pose {
         for p in &mut pts {
             *p = rot * *p + t;
@@ -356,8 +392,9 @@ fn read_ascii<R: io::BufRead>(
     body_len: u64,
 ) -> Result<Vec<Point3<f64>>, CloudError> {
     let values: usize = h.fields.iter().map(|f| f.count).sum();
-    // Each value takes at least one character and one separator (the last newline may lack).
-    too_big(path, h, 2 * values as u64, body_len)?;
+    // No size check: the body is read line by line to its end (preallocation is capped),
+    // and a row missing a value is reported where it is, not as a short file.
+    let _ = body_len;
     let mut out = Vec::with_capacity((h.points as usize).min(MAX_PREALLOC));
     let mut lineno = h.lines;
     while (out.len() as u64) < h.points {
@@ -586,7 +623,6 @@ fn lzf_decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, (usize, Strin
 /// [`read_pcd`] gives the same points back (rounded to f32). The file is written to a
 /// temporary file beside `path` and renamed into place; the same points give the same bytes.
 pub fn write_pcd(path: &Path, points: &[Point3<f64>]) -> Result<(), CloudError> {
-    use std::io::Write;
     let mut bytes = format!(
         "# .PCD v0.7 - Point Cloud Data file format (written by afford)\nVERSION 0.7\n\
          FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {n}\nHEIGHT 1\n\
@@ -600,21 +636,9 @@ pub fn write_pcd(path: &Path, points: &[Point3<f64>]) -> Result<(), CloudError> 
             bytes.extend_from_slice(&(*c as f32).to_le_bytes());
         }
     }
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(format!(".tmp-{}", std::process::id()));
-    let tmp = path.with_file_name(name);
-    let result = File::create(&tmp)
-        .and_then(|mut f| {
-            f.write_all(&bytes)?;
-            f.sync_all()
-        })
-        .and_then(|()| std::fs::rename(&tmp, path));
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        CloudError::Io {
-            path: path.to_path_buf(),
-            source: e,
-        }
+    crate::atomic::write_bytes(path, &bytes).map_err(|source| CloudError::Write {
+        path: path.to_path_buf(),
+        source,
     })
 }
 

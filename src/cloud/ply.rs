@@ -6,8 +6,8 @@
 //! after the vertices, including list properties.
 
 use std::fs::File;
-use std::io::{self, BufRead, BufReader, BufWriter, Read, Write};
-use std::path::{Path, PathBuf};
+use std::io::{self, BufRead, BufReader, Read, Write};
+use std::path::Path;
 
 use nalgebra::Point3;
 
@@ -137,7 +137,7 @@ impl Scalar {
     }
 
     /// Writes `v` as this type, little-endian (`as` casts: integers truncated and saturated).
-    fn write_le<W: Write>(self, w: &mut W, v: f64) -> io::Result<()> {
+    fn write_le<W: Write + ?Sized>(self, w: &mut W, v: f64) -> io::Result<()> {
         match self {
             Scalar::I8 => w.write_all(&(v as i8).to_le_bytes()),
             Scalar::U8 => w.write_all(&(v as u8).to_le_bytes()),
@@ -152,7 +152,7 @@ impl Scalar {
 
     /// Writes `v` as this type in ascii, with the casts of [`Scalar::write_le`]; NaN as
     /// `nan`, as C's printf writes it, which most PLY tools read.
-    fn write_ascii<W: Write>(self, w: &mut W, v: f64) -> io::Result<()> {
+    fn write_ascii<W: Write + ?Sized>(self, w: &mut W, v: f64) -> io::Result<()> {
         let v = self.decode(&self.le_bytes(v), false);
         match self {
             _ if v.is_nan() => write!(w, "nan"),
@@ -435,8 +435,14 @@ pub fn read_ply(path: &Path) -> Result<Vec<Point3<f64>>, CloudError> {
     let body_len = file_len.saturating_sub(header.len);
 
     // Every element up to the vertices must fit in the body, before anything is allocated.
+    // Binary only: an ascii body is read line by line to its end, and a row missing a
+    // value is reported where it is, not as a short file.
     let mut need = 0u64;
-    for e in &header.elements[..=vi] {
+    let checked = match header.encoding {
+        Encoding::Ascii => &header.elements[..0],
+        _ => &header.elements[..=vi],
+    };
+    for e in checked {
         let row = match header.encoding {
             Encoding::Ascii => e.min_ascii_row(),
             _ => e.min_binary_row(),
@@ -461,11 +467,49 @@ pub fn read_ply(path: &Path) -> Result<Vec<Point3<f64>>, CloudError> {
         }
     }
 
+    let last = vi + 1 == header.elements.len();
+    let v = &header.elements[vi];
     match header.encoding {
-        Encoding::Ascii => read_ascii_body(path, &mut r, &header, vi, xyz),
+        Encoding::Ascii => {
+            let pts = read_ascii_body(path, &mut r, &header, vi, xyz)?;
+            if last {
+                no_more_rows(path, &mut r, v)?;
+            }
+            Ok(pts)
+        }
         enc => {
             let mut src = Src { r, pos: header.len };
-            read_binary_body(path, &mut src, &header, vi, xyz, enc == Encoding::BinaryBe)
+            let pts =
+                read_binary_body(path, &mut src, &header, vi, xyz, enc == Encoding::BinaryBe)?;
+            let left = file_len.saturating_sub(src.pos);
+            if last && left >= v.min_binary_row().max(1) {
+                return Err(more_than_declared(path, v, format!("byte {}", src.pos)));
+            }
+            Ok(pts)
+        }
+    }
+}
+
+/// The error for a body holding more rows than its header's count (a count too small
+/// silently truncated the cloud).
+fn more_than_declared(path: &Path, e: &Element, at: String) -> CloudError {
+    body_err(
+        path,
+        at,
+        format!(
+            "the data goes on after the {} '{}' elements the header declares (is the count too small?)",
+            e.count, e.name
+        ),
+    )
+}
+
+/// Fails if a non-blank line follows the last declared row of an ascii body.
+fn no_more_rows<R: BufRead>(path: &Path, r: &mut R, e: &Element) -> Result<(), CloudError> {
+    loop {
+        match read_line_capped(r, 1 << 20).map_err(|err| io_err(path, err))? {
+            Line::Eof => return Ok(()),
+            Line::Text(b, _) if b.iter().all(u8::is_ascii_whitespace) => continue,
+            _ => return Err(more_than_declared(path, e, "the end of the data".into())),
         }
     }
 }
@@ -608,13 +652,13 @@ fn read_ascii_body<R: BufRead>(
     let v = &h.elements[vi];
     for e in &h.elements[..vi] {
         for i in 0..e.count {
-            let (text, at) = line_no.next(path, r, &e.name, i)?;
+            let (text, at) = line_no.next(path, r, &e.name, (i, e.count))?;
             check_ascii_row(path, &text, e, &at)?;
         }
     }
     let mut out = Vec::with_capacity((v.count as usize).min(MAX_PREALLOC));
     for i in 0..v.count {
-        let (text, at) = line_no.next(path, r, "vertex", i)?;
+        let (text, at) = line_no.next(path, r, "vertex", (i, v.count))?;
         let toks: Vec<&str> = text.split_ascii_whitespace().collect();
         let starts = check_ascii_row(path, &text, v, &at)?;
         let mut vals = [0f64; 3];
@@ -704,14 +748,18 @@ impl AsciiLines {
         path: &Path,
         r: &mut R,
         name: &str,
-        i: u64,
+        (i, of): (u64, u64),
     ) -> Result<(String, String), CloudError> {
         loop {
             self.lineno += 1;
             let at = format!("line {}", self.lineno);
             match read_line_capped(r, 1 << 20).map_err(|e| io_err(path, e))? {
                 Line::Eof => {
-                    return Err(body_err(path, at, format!("file ends before {name} {i}")))
+                    return Err(body_err(
+                        path,
+                        at,
+                        format!("file ends before {name} {i} of the {of} the header declares"),
+                    ))
                 }
                 Line::TooLong => return Err(body_err(path, at, "line too long")),
                 Line::Text(b, _) => {
@@ -740,9 +788,9 @@ pub(super) fn shorten(s: &str) -> String {
 /// Writes points (metres) as a PLY file: vertex `x`, `y`, `z` as `float`, then one `float`
 /// property per entry of `extra` (its name and one value per point, e.g. `detection`).
 ///
-/// `binary` selects `binary_little_endian`, otherwise `ascii`. The file is written to
-/// `<name>.tmp-<pid>` in the same directory and renamed into place, so readers never see a
-/// half-written file; the temporary file is removed on error.
+/// `binary` selects `binary_little_endian`, otherwise `ascii`. The file is written as
+/// [`crate::atomic::write_with`] writes: through a temporary file renamed into place, so
+/// readers never see a half-written file (the temporary file is removed on error).
 pub fn write_ply_points(
     path: &Path,
     points: &[Point3<f64>],
@@ -789,30 +837,16 @@ pub(crate) fn write_ply_typed(
             format!("'{}' is not one line", shorten(c)),
         ));
     }
-    let tmp = temp_path(path);
-    let result = File::create(&tmp)
-        .and_then(|f| {
-            let mut w = BufWriter::new(f);
-            write_body(&mut w, points, extra, comments, binary)?;
-            let f = w.into_inner().map_err(|e| e.into_error())?;
-            f.sync_all()
-        })
-        .and_then(|()| std::fs::rename(&tmp, path));
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io_err(path, e)
-    })
+    crate::atomic::write_with(path, |w| write_body(w, points, extra, comments, binary)).map_err(
+        |source| CloudError::Write {
+            path: path.to_path_buf(),
+            source,
+        },
+    )
 }
 
-/// `<dir>/<name>.tmp-<pid>` next to `path`.
-fn temp_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(format!(".tmp-{}", std::process::id()));
-    path.with_file_name(name)
-}
-
-fn write_body<W: Write>(
-    w: &mut W,
+fn write_body(
+    w: &mut dyn Write,
     points: &[Point3<f64>],
     extra: &[(&str, Scalar, &[f64])],
     comments: &[String],
@@ -901,6 +935,7 @@ mod tests {
         Addable, DefaultElement, ElementDef, Encoding as PlyEncoding, Ply, Property, PropertyDef,
         PropertyType, ScalarType,
     };
+    use std::path::PathBuf;
 
     fn file(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> PathBuf {
         let p = dir.path().join(name);
@@ -1151,9 +1186,9 @@ mod tests {
         let e = write_ply_points(&p, &pts, &[("x", vec![1.0, 2.0])], true).unwrap_err();
         assert!(matches!(e, CloudError::Header { .. }), "{e}");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
-        // A directory that does not exist: Io error, no panic.
+        // A directory that does not exist: a write error, no panic.
         let e = write_ply_points(&dir.path().join("no/o.ply"), &pts, &[], false).unwrap_err();
-        assert!(matches!(e, CloudError::Io { .. }), "{e}");
+        assert!(matches!(e, CloudError::Write { .. }), "{e}");
     }
 
     #[test]
