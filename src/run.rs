@@ -75,8 +75,11 @@ pub struct DetectRequest {
     pub summary: Option<PathBuf>,
     /// Segments PLY output (one per input; see [`per_input_path`]).
     pub segments: Option<PathBuf>,
-    /// Posed-agent mesh PLY output (one per input; see [`per_input_path`]).
+    /// Posed-agent mesh output, PLY or (named `.glb`) binary glTF (one per input cloud;
+    /// see [`per_input_path`]).
     pub mesh: Option<PathBuf>,
+    /// Put the cloud, coloured by segment, into a `.glb` mesh output too.
+    pub mesh_scene: bool,
     /// Scene-level numbers.
     pub config: DetectConfig,
     /// How inputs are read and brought into the world frame.
@@ -139,18 +142,33 @@ fn report_of(
 /// Where a per-input output of `input` goes: `base` itself for a single input, otherwise
 /// `base` with the input's stem inserted before the extension (`seg.chair.ply`).
 pub fn per_input_path(base: &Path, input: &Path, several: bool) -> PathBuf {
-    if !several {
+    per_part_path(base, input, None, several)
+}
+
+/// Where the per-input output of one cloud of `input` goes: as [`per_input_path`], with
+/// the cloud's `part` name (`@<time>` of a bag message) after the input's stem, or after
+/// `base`'s stem for a single input (`agents@1700000000.100000000.glb`). The extension is
+/// `base`'s (`.ply` when it has none).
+pub fn per_part_path(base: &Path, input: &Path, part: Option<&str>, several: bool) -> PathBuf {
+    if !several && part.is_none() {
         return base.to_path_buf();
     }
     let stem = base
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let ext = base
+        .extension()
+        .map_or("ply".into(), |e| e.to_string_lossy().into_owned());
+    let part = part.unwrap_or("");
+    if !several {
+        return base.with_file_name(format!("{stem}{part}.{ext}"));
+    }
     let inp = input
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    base.with_file_name(format!("{stem}.{inp}.ply"))
+    base.with_file_name(format!("{stem}.{inp}{part}.{ext}"))
 }
 
 /// Runs `afford detect`; returns the process exit code (0 every input done or skipped, 2
@@ -158,6 +176,19 @@ pub fn per_input_path(base: &Path, input: &Path, several: bool) -> PathBuf {
 /// file is asked for) or its `--log-json` line goes to `out`, and its diagnostics to `err`.
 /// The run-wide outputs (`--json`, `--csv`, `--summary`) are written at the end.
 pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    if req.mesh_scene
+        && !req
+            .mesh
+            .as_ref()
+            .and_then(|m| m.extension())
+            .is_some_and(|e| e.eq_ignore_ascii_case("glb"))
+    {
+        let _ = writeln!(
+            err,
+            "error: --mesh-scene puts the cloud into a glTF mesh: give --mesh NAME.glb"
+        );
+        return 2;
+    }
     if req.resume && req.out_dir.is_none() {
         let _ = writeln!(
             err,
@@ -235,10 +266,14 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             for e in &done.errors {
                 let _ = writeln!(err, "error: {e}");
             }
-            if let (true, Some(r)) = (table, &done.report) {
-                let _ = out.write_all(report::to_table(r).as_bytes());
+            if table {
+                for r in &done.reports {
+                    let _ = out.write_all(report::to_table(r).as_bytes());
+                }
             }
         });
+        // One log line per cloud (a bag gives several), or one for an input with none.
+        let mut lines = Vec::new();
         if let Some(done) = done {
             line.status = if done.errors.is_empty() {
                 Status::Ok
@@ -247,15 +282,23 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
                 line.error = Some(done.errors.join("; "));
                 Status::Error
             };
-            if let Some(r) = done.report {
-                line.points = Some(r.points());
-                line.detections = Some(r.detections.len());
-                line.affordances = Some(report::affords(&r, None).into_iter().cloned().collect());
+            for r in done.reports {
+                let mut l = line.clone();
+                l.file = r.file.clone();
+                l.points = Some(r.points());
+                l.detections = Some(r.detections.len());
+                l.affordances = Some(report::affords(&r, None).into_iter().cloned().collect());
+                lines.push(l);
                 reports.push(r);
             }
         }
+        if lines.is_empty() {
+            lines.push(line);
+        }
         if req.log_json {
-            let _ = bar.suspend(|| writeln!(out, "{}", line.to_json()));
+            for l in &lines {
+                let _ = bar.suspend(|| writeln!(out, "{}", l.to_json()));
+            }
         }
         let _ = out.flush();
         bar.inc(1);
@@ -294,16 +337,17 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     }
 }
 
-/// What one input gave: its report (when it could be read), its notes for stderr, and
-/// the errors of reading it or writing its per-file outputs.
+/// What one input gave: its reports (one per cloud it holds, when it could be read), its
+/// notes for stderr, and the errors of reading it or writing its per-file outputs.
 struct Done {
-    report: Option<FileReport>,
+    reports: Vec<FileReport>,
     notes: Vec<u8>,
     errors: Vec<String>,
 }
 
-/// Reads one input, detects, and writes its per-file outputs (`--segments`, `--mesh`,
-/// and its JSON in `--out-dir` at `saved`, last, so that it marks a finished input).
+/// Reads one input, detects in each of its clouds, and writes their per-file outputs
+/// (`--segments`, `--mesh`), then its JSON in `--out-dir` at `saved`, last, so that it
+/// marks a finished input.
 fn detect_one(
     req: &DetectRequest,
     models: &[Model],
@@ -312,47 +356,71 @@ fn detect_one(
     saved: Option<&Path>,
 ) -> Done {
     let mut done = Done {
-        report: None,
+        reports: Vec::new(),
         notes: Vec::new(),
         errors: Vec::new(),
     };
-    let input = match load_input(path, &req.input) {
-        Ok(i) => i,
-        Err(e) => {
-            done.errors.push(e.to_string());
-            return done;
-        }
-    };
-    notes(&input, path, &mut done.notes);
-    let r = report_of(
-        path,
-        &input.cloud,
-        input.dropped_non_finite,
-        models,
-        &req.config,
-    );
-    if let Some(base) = &req.segments {
-        let target = per_input_path(base, path, several);
-        if let Err(e) = write_segments(&input, &target, &r) {
-            done.errors.push(e.to_string());
-        }
-    }
-    if let Some(base) = &req.mesh {
-        let target = per_input_path(base, path, several);
-        if let Err(e) = crate::agent_mesh::agent_mesh_ply(&r.detections, &target) {
-            done.errors
-                .push(format!("{}: cannot write: {e}", target.display()));
-        }
+    let read = crate::input::load_inputs(path, &req.input, &mut |input| match input {
+        Ok(input) => detect_cloud(req, models, path, several, &input, &mut done),
+        Err(e) => done.errors.push(e.to_string()),
+    });
+    if let Err(e) = read {
+        done.errors.push(e.to_string());
     }
     if let (Some(target), true) = (saved, done.errors.is_empty()) {
-        let json = report::to_json(std::slice::from_ref(&r));
+        let json = report::to_json(&done.reports);
         if let Err(e) = report::write_atomic(target, json.as_bytes()) {
             done.errors
                 .push(format!("{}: cannot write: {e}", target.display()));
         }
     }
-    done.report = Some(r);
     done
+}
+
+/// Detects in one cloud of input `path` and writes its per-file outputs.
+fn detect_cloud(
+    req: &DetectRequest,
+    models: &[Model],
+    path: &Path,
+    several: bool,
+    input: &Input,
+    done: &mut Done,
+) {
+    let name = cloud::source::part_label(path, input.part.as_deref());
+    notes(input, Path::new(&name), &mut done.notes);
+    let r = report_of(
+        Path::new(&name),
+        &input.cloud,
+        input.dropped_non_finite,
+        models,
+        &req.config,
+    );
+    let part = input.part.as_deref();
+    if let Some(base) = &req.segments {
+        let target = per_part_path(base, path, part, several);
+        if let Err(e) = write_segments(input, &target, &r) {
+            done.errors.push(e.to_string());
+        }
+    }
+    if let Some(base) = &req.mesh {
+        let target = per_part_path(base, path, part, several);
+        let glb = base
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+        let written = if glb {
+            let scene = req
+                .mesh_scene
+                .then_some((input.cloud.points.as_slice(), r.labels.as_slice()));
+            crate::glb::write_agents_glb(&target, &name, &r.detections, scene)
+        } else {
+            crate::agent_mesh::agent_mesh_ply(&r.detections, &target)
+        };
+        if let Err(e) = written {
+            done.errors
+                .push(format!("{}: cannot write: {e}", target.display()));
+        }
+    }
+    done.reports.push(r);
 }
 
 /// Writes the input cloud (world frame) with its segments ([`crate::agent_mesh::segments_ply`]).
