@@ -280,7 +280,10 @@ mod tests {
     fn empty_is_a_valid_header_and_json_chunk() {
         let g = agents_glb("x.ply", &[], None);
         assert_eq!(&g[..4], b"glTF");
-        assert_eq!(u32::from_le_bytes(g[8..12].try_into().unwrap()) as usize, g.len());
+        assert_eq!(
+            u32::from_le_bytes(g[8..12].try_into().unwrap()) as usize,
+            g.len()
+        );
         let n = u32::from_le_bytes(g[12..16].try_into().unwrap()) as usize;
         assert_eq!(20 + n, g.len());
         let doc: Value = serde_json::from_slice(&g[20..]).unwrap();

@@ -207,7 +207,12 @@ fn json_detection(i: usize, d: &Detection) -> JsonDetection<'_> {
         joints: d
             .joints
             .iter()
-            .map(|(k, p)| (k.clone(), serde_json::json!([0, 1, 2].map(|i| round(p[i], 4)))))
+            .map(|(k, p)| {
+                (
+                    k.clone(),
+                    serde_json::json!([0, 1, 2].map(|i| round(p[i], 4))),
+                )
+            })
             .collect(),
         segment_points: d.segment_points,
     }

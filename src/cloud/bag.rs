@@ -52,10 +52,14 @@ fn topics(path: &Path, buf: &[u8]) -> Result<(BTreeSet<String>, Vec<String>), Cl
             }
         }
         _ => {
-            let stream = ::mcap::MessageStream::new(buf).map_err(|e| body(path, "byte 0".into(), e))?;
+            let stream =
+                ::mcap::MessageStream::new(buf).map_err(|e| body(path, "byte 0".into(), e))?;
             for (i, m) in stream.enumerate() {
                 let m = m.map_err(|e| body(path, format!("record of message {}", i + 1), e))?;
-                add(&m.channel.topic, m.channel.schema.as_ref().map(|s| s.name.as_str()));
+                add(
+                    &m.channel.topic,
+                    m.channel.schema.as_ref().map(|s| s.name.as_str()),
+                );
             }
         }
     }

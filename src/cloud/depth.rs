@@ -144,7 +144,10 @@ mod tests {
             cy: 0.0,
         };
         let e = read_depth_png(&p, &k, 0.001).unwrap_err().to_string();
-        assert!(e.contains("rgb.png") && e.contains("16-bit greyscale"), "{e}");
+        assert!(
+            e.contains("rgb.png") && e.contains("16-bit greyscale"),
+            "{e}"
+        );
         let e = read_depth_png(&p, &k, 0.0).unwrap_err().to_string();
         assert!(e.contains("--depth-scale"), "{e}");
     }

@@ -134,9 +134,9 @@ pub fn decode(buf: &[u8], encoding: Encoding) -> Result<Decoded, String> {
                 Some([0, 0]) => false,
                 Some(h) => {
                     return Err(format!(
-                        "byte 0: CDR encapsulation {:#04x}{:02x} is not plain CDR (0x0000 or 0x0001)",
-                        h[0], h[1]
-                    ))
+                    "byte 0: CDR encapsulation {:#04x}{:02x} is not plain CDR (0x0000 or 0x0001)",
+                    h[0], h[1]
+                ))
                 }
                 None => return Err("byte 0: the message is shorter than its CDR header".into()),
             };

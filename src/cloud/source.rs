@@ -225,20 +225,36 @@ mod tests {
     fn intrinsics_parse_and_refuse() {
         let k: Intrinsics = "525, 525.5,319.5,239.5".parse().unwrap();
         assert_eq!((k.fx, k.fy, k.cx, k.cy), (525.0, 525.5, 319.5, 239.5));
-        for bad in ["525,525,319.5", "0,1,2,3", "a,1,2,3", "1,1,nan,3", "1,2,3,4,5"] {
+        for bad in [
+            "525,525,319.5",
+            "0,1,2,3",
+            "a,1,2,3",
+            "1,1,nan,3",
+            "1,2,3,4,5",
+        ] {
             assert!(bad.parse::<Intrinsics>().is_err(), "{bad}");
         }
     }
 
     #[test]
     fn times_parse_exactly_and_print_back() {
-        assert_eq!(parse_time("1700000000.25").unwrap(), 1_700_000_000_250_000_000);
+        assert_eq!(
+            parse_time("1700000000.25").unwrap(),
+            1_700_000_000_250_000_000
+        );
         assert_eq!(parse_time("@3").unwrap(), 3_000_000_000);
         assert_eq!(parse_time("0.000000001").unwrap(), 1);
         let ns = 1_700_000_000_123_456_789;
         assert_eq!(time_name(ns), "@1700000000.123456789");
         assert_eq!(parse_time(&time_name(ns)).unwrap(), ns);
-        for bad in ["", "-1", "1.2.3", "1e9", "1.0000000001", "99999999999999999999"] {
+        for bad in [
+            "",
+            "-1",
+            "1.2.3",
+            "1e9",
+            "1.0000000001",
+            "99999999999999999999",
+        ] {
             assert!(parse_time(bad).is_err(), "{bad}");
         }
     }
