@@ -247,9 +247,9 @@ pub fn seeds(dir: &Path, pts: &[Point3<f64>]) {
         ("lz4", Some(mcap::Compression::Lz4)),
         ("zstd", Some(mcap::Compression::Zstd)),
     ] {
-        write_bag(&dir.join(format!("{name}.mcap")), &clouds, &layouts, c);
+        write_bag(&dir.join(format!("seed_{name}.mcap")), &clouds, &layouts, c);
     }
     let mut msg = vec![0u8];
     msg.extend(encode_cdr(pts, 2, 1, 2, false, true));
-    std::fs::write(dir.join("message.cdr"), msg).unwrap();
+    std::fs::write(dir.join("seed_message.cdr"), msg).unwrap();
 }

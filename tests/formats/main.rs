@@ -108,9 +108,9 @@ fn write_fuzz_seeds() {
         std::fs::create_dir_all(root.join(t)).unwrap();
     }
     bag::seeds(&root.join("bag"), &pts);
-    scans::seed(&root.join("e57/seed.e57"), &pts);
+    scans::seed(&root.join("e57/seed_scans.e57"), &pts);
     afford::cloud::depth::write_depth_png(
-        &root.join("depth/seed.png"),
+        &root.join("depth/seed_depth.png"),
         4,
         &[0, 1000, 2000, 65535, 5, 6, 7, 8],
     )
