@@ -253,3 +253,31 @@ pub fn seeds(dir: &Path, pts: &[Point3<f64>]) {
     msg.extend(encode_cdr(pts, 2, 1, 2, false, true));
     std::fs::write(dir.join("seed_message.cdr"), msg).unwrap();
 }
+
+#[test]
+fn convert_takes_one_message_by_time_and_refuses_a_choice_of_several() {
+    let d = tempfile::tempdir().unwrap();
+    let bag = d.path().join("run.mcap");
+    let clouds: Vec<Vec<Point3<f64>>> = (0..3)
+        .map(|i| vec![Point3::new(i as f64, 0.5, 0.25); 3])
+        .collect();
+    write_bag(&bag, &clouds, &[(1, 0, 0, true, false); 3], None);
+    let out = d.path().join("one.ply");
+    let (b, o) = (bag.to_str().unwrap(), out.to_str().unwrap());
+    afford(&["convert", b, o, "--at", "1700000000.14"]);
+    assert_eq!(afford::cloud::read_ply(&out).unwrap(), clouds[1]);
+    std::fs::remove_file(&out).unwrap();
+    assert_eq!(afford::cli::main(["afford", "convert", b, o]), 2);
+    assert!(!out.exists());
+    let both = [
+        "afford",
+        "convert",
+        b,
+        o,
+        "--every",
+        "2",
+        "--at",
+        "1700000000.3",
+    ];
+    assert_eq!(afford::cli::main(both), 2);
+}
