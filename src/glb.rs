@@ -30,6 +30,10 @@ const UNSIGNED_INT: u32 = 5125;
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 
+/// The cloud the detections were found in (world frame, metres), and per point the
+/// detection whose segment holds it.
+pub type ScenePoints<'a> = (&'a [Point3<f64>], &'a [Option<usize>]);
+
 /// The name of detection `i`'s node: its number and affordances.
 pub fn node_name(i: usize, d: &Detection) -> String {
     format!("detection {i}: {}", d.affordances.join(", "))
@@ -115,11 +119,7 @@ fn round(x: f64, d: i32) -> f64 {
 
 /// The bytes of the `.glb` of `detections` found in `file`; with `points` (the cloud, and
 /// per point the detection whose segment holds it), the cloud as coloured points too.
-pub fn agents_glb(
-    file: &str,
-    detections: &[Detection],
-    points: Option<(&[Point3<f64>], &[Option<usize>])>,
-) -> Vec<u8> {
+pub fn agents_glb(file: &str, detections: &[Detection], points: Option<ScenePoints>) -> Vec<u8> {
     let mut b = Builder::default();
     let mut materials: Vec<Value> = Vec::new();
     let mut material_of: Vec<[u8; 3]> = Vec::new();
@@ -232,11 +232,11 @@ pub fn agents_glb(
         doc["buffers"] = json!([{"byteLength": b.bin.len()}]);
     }
     let mut text = serde_json::to_vec(&doc).unwrap_or_default();
-    while text.len() % 4 != 0 {
+    while !text.len().is_multiple_of(4) {
         text.push(b' ');
     }
     let mut bin = b.bin;
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + text.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
@@ -260,7 +260,7 @@ pub fn write_agents_glb(
     path: &Path,
     file: &str,
     detections: &[Detection],
-    points: Option<(&[Point3<f64>], &[Option<usize>])>,
+    points: Option<ScenePoints>,
 ) -> std::io::Result<()> {
     crate::report::write_atomic(path, &agents_glb(file, detections, points))
 }

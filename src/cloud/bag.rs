@@ -150,7 +150,7 @@ pub fn read_bag(
                 handed += 1;
             }
             Pick::Every(n) => {
-                if (seen - 1) % n.max(1) == 0 {
+                if (seen - 1).is_multiple_of(n.max(1)) {
                     each(decode_one(&m, seen)?);
                     handed += 1;
                 }

@@ -170,8 +170,9 @@ pub fn decode(buf: &[u8], encoding: Encoding) -> Result<Decoded, String> {
     };
     let stamp_ns = sec * 1_000_000_000 + nsec as i128;
     let frame_id = c.string("header.frame_id")?;
-    let height = c.u32("height")? as u64;
-    let width = c.u32("width")? as u64;
+    // Sizes in u128: products of two u32 fields cannot overflow.
+    let height = c.u32("height")? as u128;
+    let width = c.u32("width")? as u128;
     let nfields_at = c.pos;
     let nfields = c.u32("fields")? as usize;
     // Each field takes at least 13 bytes: a bound before allocating anything.
@@ -210,8 +211,8 @@ pub fn decode(buf: &[u8], encoding: Encoding) -> Result<Decoded, String> {
         return Err("the message has no x, y and z fields".into());
     };
     let big = c.u8("is_bigendian")? != 0;
-    let point_step = c.u32("point_step")? as u64;
-    let row_step = c.u32("row_step")? as u64;
+    let point_step = c.u32("point_step")? as u128;
+    let row_step = c.u32("row_step")? as u128;
     let data_len = c.u32("data")? as usize;
     let data_at = c.pos;
     let data = c.bytes(data_len, "data")?;
@@ -223,7 +224,7 @@ pub fn decode(buf: &[u8], encoding: Encoding) -> Result<Decoded, String> {
             points: Vec::new(),
         });
     }
-    if (need as u64) > point_step {
+    if (need as u128) > point_step {
         return Err(format!(
             "point_step {point_step} is shorter than the x, y, z fields (they end at byte {need})"
         ));
@@ -238,8 +239,8 @@ pub fn decode(buf: &[u8], encoding: Encoding) -> Result<Decoded, String> {
     } else {
         width * point_step
     };
-    let last = (height - 1) * row + (width - 1) * point_step + need as u64;
-    if last > data.len() as u64 {
+    let last = (height - 1) * row + (width - 1) * point_step + need as u128;
+    if last > data.len() as u128 {
         return Err(format!(
             "byte {data_at}: data holds {} bytes, {height} x {width} points of {point_step} bytes need {last}",
             data.len()
@@ -330,7 +331,7 @@ struct Writer {
 
 impl Writer {
     fn u32(&mut self, v: u32) {
-        while (self.out.len() - 4) % 4 != 0 {
+        while !(self.out.len() - 4).is_multiple_of(4) {
             self.out.push(0);
         }
         self.out.extend(if self.little {
