@@ -281,3 +281,19 @@ fn convert_takes_one_message_by_time_and_refuses_a_choice_of_several() {
     ];
     assert_eq!(afford::cli::main(both), 2);
 }
+
+#[test]
+fn a_forged_record_length_is_an_error_not_an_allocation_failure() {
+    // Found by the `bag` fuzz target: a record inside a zstd chunk claims 434 PB, which
+    // the `mcap` crate used to allocate (abort) before `MAX_RECORD` was set.
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join("forged.mcap");
+    std::fs::write(&p, include_bytes!("crash_record_length.mcap")).unwrap();
+    let e = read_parts(&p, &SourceOptions::default(), &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("forged.mcap") && e.contains("exceeds limit"),
+        "{e}"
+    );
+}
