@@ -204,6 +204,7 @@ mod tests {
             availability: 1.0,
             segment_points: 0,
             parts,
+            joints: vec![],
         }
     }
 

@@ -68,7 +68,7 @@ pub enum BatchError {
         #[source]
         source: std::io::Error,
     },
-    /// A saved output is not a detect JSON (version 2) or summary CSV.
+    /// A saved output is not a detect JSON (version 2 or 3) or summary CSV.
     #[error("{path}: {what}")]
     Saved {
         /// The saved output.
@@ -365,7 +365,7 @@ struct DocDetection {
     affordances: Vec<String>,
 }
 
-/// Reads a detect JSON (`--json` or one file of `--out-dir`, version 2).
+/// Reads a detect JSON (`--json` or one file of `--out-dir`, version 2 or 3).
 fn saved_json(text: &str, path: &Path) -> Result<Vec<SavedFile>, BatchError> {
     let bad = |what: String| BatchError::Saved {
         path: path.to_path_buf(),
@@ -373,10 +373,12 @@ fn saved_json(text: &str, path: &Path) -> Result<Vec<SavedFile>, BatchError> {
     };
     let doc: Doc = serde_json::from_str(text)
         .map_err(|e| bad(format!("not an `afford detect` JSON output: {e}")))?;
-    if doc.version != 2 {
+    // Version 3 only added joint positions: both carry what is read here.
+    if !(2..=crate::report::JSON_VERSION).contains(&doc.version) {
         return Err(bad(format!(
-            "JSON version {} (this afford reads version 2)",
-            doc.version
+            "JSON version {} (this afford reads versions 2 to {})",
+            doc.version,
+            crate::report::JSON_VERSION
         )));
     }
     Ok(doc

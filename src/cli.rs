@@ -24,7 +24,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Detect fine-grained affordances in point clouds (PLY, PCD, XYZ).
+    /// Detect fine-grained affordances in point clouds (PLY, PCD, XYZ, E57, ROS bags, depth PNG).
     #[command(after_help = DETECT_AFTER_HELP)]
     Detect(DetectArgs),
     /// Draw the height map, the hypotheses and the posed agents of one cloud as a PNG.
@@ -155,6 +155,8 @@ struct InputArgs {
     /// Sample meshes (OBJ, OFF, STL, PLY with faces) at this many points per square metre.
     #[arg(long)]
     sample: Option<f64>,
+    #[command(flatten)]
+    source: crate::source_args::SourceArgs,
 }
 
 impl InputArgs {
@@ -199,6 +201,7 @@ impl InputArgs {
                 camera: self.camera,
             },
             sample: self.sample,
+            source: self.source.options(),
         })
     }
 }
@@ -275,9 +278,13 @@ struct DetectArgs {
     /// Write the segmented points as PLY with a per-point detection index.
     #[arg(long)]
     segments: Option<PathBuf>,
-    /// Write the posed agents as a coloured triangle mesh (PLY).
+    /// Write the posed agents as a coloured triangle mesh: PLY, or binary glTF for a .glb
+    /// name (each detection a named node).
     #[arg(long)]
     mesh: Option<PathBuf>,
+    /// With --mesh x.glb: the cloud as points too, coloured by segment.
+    #[arg(long, requires = "mesh")]
+    mesh_scene: bool,
     /// Worker threads, 1 to 256 (default: all cores); the output does not depend on it.
     #[arg(long, value_parser = parse_threads)]
     threads: Option<usize>,
@@ -392,6 +399,7 @@ where
                 summary: a.summary,
                 segments: a.segments,
                 mesh: a.mesh,
+                mesh_scene: a.mesh_scene,
                 config: config(&a.models),
                 input,
                 progress: !a.quiet && std::io::stderr().is_terminal(),

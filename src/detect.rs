@@ -87,6 +87,9 @@ pub struct Detection {
     pub segment_points: usize,
     /// The posed body parts of the goal pose, world frame (for pictures and meshes).
     pub parts: Vec<Cylinder>,
+    /// Every joint's origin in the goal pose H_g, world frame, metres, in the agent's
+    /// joint order: the forward kinematics of `pose` at `position` and `yaw`.
+    pub joints: Vec<(String, Point3<f64>)>,
 }
 
 /// Everything one run over one cloud produced.
@@ -281,5 +284,11 @@ fn to_detection(agent: &Agent, h: &Hierarchy, hyp: &Hypothesis, u: &Unfolded) ->
         availability: hyp.availability,
         segment_points: 0,
         parts: agent.cylinders(&frames, |_| true),
+        joints: agent
+            .joints
+            .iter()
+            .zip(&frames)
+            .map(|(j, f)| (j.name.clone(), Point3::from(f.translation.vector)))
+            .collect(),
     }
 }

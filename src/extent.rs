@@ -54,8 +54,10 @@ impl Default for ExtentConfig {
 
 /// Bytes in a GiB, for messages.
 const GIB: f64 = (1u64 << 30) as f64;
-/// Bytes per height-map cell (`Option<f64>`).
-const HEIGHTMAP_CELL_BYTES: f64 = std::mem::size_of::<Option<f64>>() as f64;
+/// Bytes per height-map cell: the `Option<f64>` height and the two `usize` column offsets
+/// of the per-cell sort (`heightmap::HeightMap::from_cloud`).
+const HEIGHTMAP_CELL_BYTES: f64 =
+    (std::mem::size_of::<Option<f64>>() + 2 * std::mem::size_of::<usize>()) as f64;
 /// Bytes per distance-field cell: two `f32` grids (the transform's input and output).
 const FIELD_CELL_BYTES: f64 = 8.0;
 
@@ -166,7 +168,7 @@ pub fn guard<'a>(
 /// Bytes the height map and the distance field take over an extent (metres along x, y, z),
 /// as an upper bound (computed in f64, so any extent gives a number).
 pub fn grid_bytes(extent: [f64; 3], cfg: &DetectConfig) -> f64 {
-    let hc = cfg.heightmap_cell;
+    let hc = cfg.heightmap.cell;
     let map = (extent[0] / hc + 1.0).floor() * (extent[1] / hc + 1.0).floor();
     let v = cfg.scene.voxel_size;
     let margin = 2.0 * (cfg.scene.field_margin / v).ceil();

@@ -13,6 +13,8 @@ pub struct InputOptions {
     /// Sample meshes (and PLY files with faces) at this many points per square metre;
     /// `None` reads PLY vertices as points and samples OBJ/OFF/STL at [`MESH_DENSITY`].
     pub sample: Option<f64>,
+    /// Which clouds of bags, E57 files and depth images (topic, messages, scan, intrinsics).
+    pub source: cloud::SourceOptions,
 }
 
 /// Default surface density for meshes, points per square metre: 1 cm apart, so that every
@@ -24,6 +26,9 @@ const MESH_SEED: u64 = 0;
 /// A cloud ready for detection.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Input {
+    /// Which cloud of the file this is (`@<time>` of a bag message), `None` for the file's
+    /// only cloud; see [`crate::cloud::source::part_label`].
+    pub part: Option<String>,
     /// The points, world frame.
     pub cloud: PointCloud,
     /// Points dropped for a non-finite coordinate.
@@ -60,29 +65,87 @@ fn is_mesh(path: &Path) -> bool {
 }
 
 /// Reads `path` (points, or a mesh sampled by area) and brings it into the world frame.
+/// A file must give one cloud: a bag with several selected messages is an error (see
+/// [`load_inputs`]).
 pub fn load_input(path: &Path, opts: &InputOptions) -> Result<Input, InputError> {
-    let loaded = if is_mesh(path) || opts.sample.is_some() {
+    let mut first = None;
+    let mut count = 0usize;
+    let mut failed = None;
+    load_inputs(path, opts, &mut |i| {
+        count += 1;
+        match i {
+            Ok(i) if first.is_none() => first = Some(i),
+            Err(e) if failed.is_none() => failed = Some(e),
+            _ => {}
+        }
+    })?;
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    match (first, count) {
+        (Some(i), 1) => Ok(i),
+        (_, n) => Err(InputError::Cloud(cloud::source::select_error(
+            path,
+            format!("{n} clouds selected where one is read; pick one with --at TIME"),
+        ))),
+    }
+}
+
+/// Reads every cloud of `path` that `opts.source` selects (one for most formats, the
+/// selected messages of a bag), brings each into the world frame and hands it to `each`
+/// as it is read: a long bag is never held in memory. Returns how many clouds were read;
+/// an error of the file itself (unreadable, malformed) is returned, an error of one
+/// cloud's frame (no floor found) is handed over in its place.
+pub fn load_inputs(
+    path: &Path,
+    opts: &InputOptions,
+    each: &mut dyn FnMut(Result<Input, InputError>),
+) -> Result<usize, InputError> {
+    let to_input = |part: cloud::Part| -> Result<Input, InputError> {
+        let mut frame = opts.frame.clone();
+        // Depth images are in the camera's optical frame, whatever the flags say.
+        frame.camera |= part.camera;
+        world(path, part.name, part.cloud, &frame)
+    };
+    if is_mesh(path) || opts.sample.is_some() {
         let mesh = cloud::read_mesh(path)?;
         // Density is per square metre of the final cloud; the mesh is in the file's units.
         let k = opts.frame.units.factor();
         let density = opts.sample.unwrap_or(MESH_DENSITY) * k * k;
-        cloud::keep_finite(cloud::sample_mesh(&mesh, density, MESH_SEED).points)
-    } else {
-        cloud::load(path)?
-    };
-    let untouched = opts.frame == FrameOptions::default();
+        let loaded = cloud::keep_finite(cloud::sample_mesh(&mesh, density, MESH_SEED).points);
+        each(to_input(cloud::Part {
+            name: None,
+            cloud: loaded,
+            camera: false,
+        }));
+        return Ok(1);
+    }
+    Ok(cloud::read_parts(path, &opts.source, &mut |p| {
+        each(to_input(p))
+    })?)
+}
+
+/// Brings one cloud of `path` into the world frame.
+fn world(
+    path: &Path,
+    part: Option<String>,
+    loaded: cloud::LoadedCloud,
+    frame: &FrameOptions,
+) -> Result<Input, InputError> {
+    let untouched = *frame == FrameOptions::default();
+    let label = cloud::source::part_label(path, part.as_deref());
     let (cloud, frame) = if untouched {
         (loaded.cloud, None)
     } else {
-        let (c, r) =
-            cloud::to_world(loaded.cloud, &opts.frame).map_err(|source| InputError::Frame {
-                path: path.to_path_buf(),
-                source,
-            })?;
+        let (c, r) = cloud::to_world(loaded.cloud, frame).map_err(|source| InputError::Frame {
+            path: PathBuf::from(&label),
+            source,
+        })?;
         (c, Some(r))
     };
-    let units_warning = cloud::check_units(&cloud).map(|w| format!("{}: {w}", path.display()));
+    let units_warning = cloud::check_units(&cloud).map(|w| format!("{label}: {w}"));
     Ok(Input {
+        part,
         cloud,
         dropped_non_finite: loaded.dropped_non_finite,
         frame,
@@ -92,8 +155,9 @@ pub fn load_input(path: &Path, opts: &InputOptions) -> Result<Input, InputError>
 
 /// Extensions taken from a folder (clouds and meshes), lower case. Text clouds named
 /// `.txt` or `.csv` are read when given by name, but not picked out of a folder, where
-/// such files are usually labels and notes.
-pub const EXTENSIONS: [&str; 6] = ["ply", "pcd", "xyz", "obj", "off", "stl"];
+/// such files are usually labels and notes; PNG depth images likewise, as a folder of
+/// PNGs is more often pictures.
+pub const EXTENSIONS: [&str; 8] = ["ply", "pcd", "xyz", "obj", "off", "stl", "e57", "mcap"];
 
 /// The files in folder `dir` (not recursive) whose extension is one of `extensions`
 /// (lower case; compared without case), sorted by name.

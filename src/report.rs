@@ -125,6 +125,7 @@ struct JsonDetection<'a> {
     availability: f64,
     local_scores: serde_json::Map<String, serde_json::Value>,
     pose_deg: serde_json::Map<String, serde_json::Value>,
+    joints: serde_json::Map<String, serde_json::Value>,
     segment_points: usize,
 }
 
@@ -202,6 +203,16 @@ fn json_detection(i: usize, d: &Detection) -> JsonDetection<'_> {
             .iter()
             .map(|(k, v)| (k.clone(), serde_json::Value::from(round(*v, 2))))
             .collect(),
+        joints: d
+            .joints
+            .iter()
+            .map(|(k, p)| {
+                (
+                    k.clone(),
+                    serde_json::json!([0, 1, 2].map(|i| round(p[i], 4))),
+                )
+            })
+            .collect(),
         segment_points: d.segment_points,
     }
 }
@@ -220,8 +231,13 @@ pub fn affords<'a>(r: &'a FileReport, body: Option<(&str, f64)>) -> Vec<&'a Stri
         .collect()
 }
 
-/// The JSON document of a run: `{"version": 2, "files": [...]}` with one entry per input
-/// file, each with its runs (body and hierarchy) and its detections (each naming its body).
+/// The version of the JSON document: 3 added every joint's world position (`joints`) to
+/// each detection; 2 had several bodies per file.
+pub const JSON_VERSION: u32 = 3;
+
+/// The JSON document of a run: `{"version": 3, "files": [...]}` ([`JSON_VERSION`]) with one
+/// entry per input file, each with its runs (body and hierarchy) and its detections (each
+/// naming its body, with its goal pose as angles and as joint positions).
 pub fn to_json(reports: &[FileReport]) -> String {
     #[derive(Serialize)]
     struct Doc<'a> {
@@ -229,7 +245,7 @@ pub fn to_json(reports: &[FileReport]) -> String {
         files: Vec<JsonFile<'a>>,
     }
     let doc = Doc {
-        version: 2,
+        version: JSON_VERSION,
         files: reports.iter().map(json_file).collect(),
     };
     let mut s = serde_json::to_string_pretty(&doc).unwrap_or_default();

@@ -76,8 +76,11 @@ pub struct DetectRequest {
     pub summary: Option<PathBuf>,
     /// Segments PLY output (one per input; see [`per_input_path`]).
     pub segments: Option<PathBuf>,
-    /// Posed-agent mesh PLY output (one per input; see [`per_input_path`]).
+    /// Posed-agent mesh output, PLY or (named `.glb`) binary glTF (one per input cloud;
+    /// see [`per_input_path`]).
     pub mesh: Option<PathBuf>,
+    /// Put the cloud, coloured by segment, into a `.glb` mesh output too.
+    pub mesh_scene: bool,
     /// Scene-level numbers.
     pub config: DetectConfig,
     /// How inputs are read and brought into the world frame.
@@ -155,18 +158,33 @@ fn report_of(
 /// Where a per-input output of `input` goes: `base` itself for a single input, otherwise
 /// `base` with the input's stem inserted before the extension (`seg.chair.ply`).
 pub fn per_input_path(base: &Path, input: &Path, several: bool) -> PathBuf {
-    if !several {
+    per_part_path(base, input, None, several)
+}
+
+/// Where the per-input output of one cloud of `input` goes: as [`per_input_path`], with
+/// the cloud's `part` name (`@<time>` of a bag message) after the input's stem, or after
+/// `base`'s stem for a single input (`agents@1700000000.100000000.glb`). The extension is
+/// `base`'s (`.ply` when it has none).
+pub fn per_part_path(base: &Path, input: &Path, part: Option<&str>, several: bool) -> PathBuf {
+    if !several && part.is_none() {
         return base.to_path_buf();
     }
     let stem = base
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let ext = base
+        .extension()
+        .map_or("ply".into(), |e| e.to_string_lossy().into_owned());
+    let part = part.unwrap_or("");
+    if !several {
+        return base.with_file_name(format!("{stem}{part}.{ext}"));
+    }
     let inp = input
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    base.with_file_name(format!("{stem}.{inp}.ply"))
+    base.with_file_name(format!("{stem}.{inp}{part}.{ext}"))
 }
 
 /// Runs `afford detect`; returns the process exit code (0 every input done or skipped, 2
@@ -174,6 +192,19 @@ pub fn per_input_path(base: &Path, input: &Path, several: bool) -> PathBuf {
 /// file is asked for) or its `--log-json` line goes to `out`, and its diagnostics to `err`.
 /// The run-wide outputs (`--json`, `--csv`, `--summary`) are written at the end.
 pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+    if req.mesh_scene
+        && !req
+            .mesh
+            .as_ref()
+            .and_then(|m| m.extension())
+            .is_some_and(|e| e.eq_ignore_ascii_case("glb"))
+    {
+        let _ = writeln!(
+            err,
+            "error: --mesh-scene puts the cloud into a glTF mesh: give --mesh NAME.glb"
+        );
+        return 2;
+    }
     if req.resume && req.out_dir.is_none() {
         let _ = writeln!(
             err,
@@ -250,7 +281,7 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
                     None
                 }
                 Err(e) => Some(Done {
-                    report: None,
+                    reports: Vec::new(),
                     errors: vec![batch::printable(&e)],
                 }),
             }
@@ -270,12 +301,16 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             for e in &done.errors {
                 let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             }
-            if let (true, Some(r)) = (table, &done.report) {
-                if let Err(e) = out.write_all(report::to_table(r).as_bytes()) {
-                    out_error.get_or_insert(e);
+            if table {
+                for r in &done.reports {
+                    if let Err(e) = out.write_all(report::to_table(r).as_bytes()) {
+                        out_error.get_or_insert(e);
+                    }
                 }
             }
         });
+        // One log line per cloud (a bag gives several), or one for an input with none.
+        let mut lines = Vec::new();
         if let Some(done) = done {
             line.status = if done.errors.is_empty() {
                 Status::Ok
@@ -284,16 +319,24 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
                 line.error = Some(done.errors.join("; "));
                 Status::Error
             };
-            if let Some(r) = done.report {
-                line.points = Some(r.points());
-                line.detections = Some(r.detections.len());
-                line.affordances = Some(report::affords(&r, None).into_iter().cloned().collect());
+            for r in done.reports {
+                let mut l = line.clone();
+                l.file = r.file.clone();
+                l.points = Some(r.points());
+                l.detections = Some(r.detections.len());
+                l.affordances = Some(report::affords(&r, None).into_iter().cloned().collect());
+                lines.push(l);
                 reports.push(r);
             }
         }
+        if lines.is_empty() {
+            lines.push(line);
+        }
         if req.log_json {
-            if let Err(e) = bar.suspend(|| writeln!(out, "{}", line.to_json())) {
-                out_error.get_or_insert(e);
+            for l in &lines {
+                if let Err(e) = bar.suspend(|| writeln!(out, "{}", l.to_json())) {
+                    out_error.get_or_insert(e);
+                }
             }
         }
         if let Err(e) = out.flush() {
@@ -447,12 +490,13 @@ fn check_outputs(req: &DetectRequest, files: &[PathBuf], several: bool) -> Resul
 /// What one input gave: its report (when it could be read), and the errors of reading it
 /// or writing its per-file outputs.
 struct Done {
-    report: Option<FileReport>,
+    reports: Vec<FileReport>,
     errors: Vec<String>,
 }
 
-/// Reads one input, detects, and writes its per-file outputs (`--segments`, `--mesh`,
-/// and its JSON in `--out-dir` at `saved`, last, so that it marks a finished input).
+/// Reads one input, detects in each of its clouds, and writes their per-file outputs
+/// (`--segments`, `--mesh`), then its JSON in `--out-dir` at `saved`, last, so that it
+/// marks a finished input.
 fn detect_one(
     req: &DetectRequest,
     models: &[Model],
@@ -462,25 +506,49 @@ fn detect_one(
     warn: &mut dyn FnMut(&[u8]),
 ) -> Done {
     let mut done = Done {
-        report: None,
+        reports: Vec::new(),
         errors: Vec::new(),
     };
-    let input = match load_input(path, &req.input) {
-        Ok(i) => i,
-        Err(e) => {
-            done.errors.push(batch::printable(&e.to_string()));
-            return done;
+    let read = crate::input::load_inputs(path, &req.input, &mut |input| match input {
+        Ok(input) => detect_cloud(req, models, path, several, &input, &mut done, warn),
+        Err(e) => done.errors.push(batch::printable(&e.to_string())),
+    });
+    if let Err(e) = read {
+        done.errors.push(batch::printable(&e.to_string()));
+    }
+    if let (Some(target), true) = (saved, done.errors.is_empty()) {
+        let json = report::to_json(&done.reports);
+        if let Err(e) = report::write_atomic(target, json.as_bytes()) {
+            done.errors.push(batch::printable(&format!(
+                "{}: cannot write: {e}",
+                target.display()
+            )));
         }
-    };
+    }
+    done
+}
+
+/// Detects in one cloud of input `path` and writes its per-file outputs; its warnings go
+/// to `warn` first, before detection, which may take long.
+fn detect_cloud(
+    req: &DetectRequest,
+    models: &[Model],
+    path: &Path,
+    several: bool,
+    input: &Input,
+    done: &mut Done,
+    warn: &mut dyn FnMut(&[u8]),
+) {
+    let name = cloud::source::part_label(path, input.part.as_deref());
     let mut notes_text = Vec::new();
-    notes(&input, path, &mut notes_text);
+    notes(input, Path::new(&name), &mut notes_text);
     let notes_text: String = String::from_utf8_lossy(&notes_text)
         .lines()
         .map(|l| batch::printable(l) + "\n")
         .collect();
     warn(notes_text.as_bytes());
     let r = match report_of(
-        path,
+        Path::new(&name),
         &input.cloud,
         input.dropped_non_finite,
         models,
@@ -489,35 +557,37 @@ fn detect_one(
         Ok(r) => r,
         Err(e) => {
             done.errors.push(batch::printable(&e.to_string()));
-            return done;
+            return;
         }
     };
+    let part = input.part.as_deref();
     if let Some(base) = &req.segments {
-        let target = per_input_path(base, path, several);
-        if let Err(e) = write_segments(&input, &target, &r) {
+        let target = per_part_path(base, path, part, several);
+        if let Err(e) = write_segments(input, &target, &r) {
             done.errors.push(batch::printable(&e.to_string()));
         }
     }
     if let Some(base) = &req.mesh {
-        let target = per_input_path(base, path, several);
-        if let Err(e) = crate::agent_mesh::agent_mesh_ply(&r.detections, &target) {
+        let target = per_part_path(base, path, part, several);
+        let glb = base
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+        let written = if glb {
+            let scene = req
+                .mesh_scene
+                .then_some((input.cloud.points.as_slice(), r.labels.as_slice()));
+            crate::glb::write_agents_glb(&target, &name, &r.detections, scene)
+        } else {
+            crate::agent_mesh::agent_mesh_ply(&r.detections, &target)
+        };
+        if let Err(e) = written {
             done.errors.push(batch::printable(&format!(
                 "{}: cannot write: {e}",
                 target.display()
             )));
         }
     }
-    if let (Some(target), true) = (saved, done.errors.is_empty()) {
-        let json = report::to_json(std::slice::from_ref(&r));
-        if let Err(e) = report::write_atomic(target, json.as_bytes()) {
-            done.errors.push(batch::printable(&format!(
-                "{}: cannot write: {e}",
-                target.display()
-            )));
-        }
-    }
-    done.report = Some(r);
-    done
+    done.reports.push(r);
 }
 
 /// Writes the input cloud (world frame) with its segments ([`crate::agent_mesh::segments_ply`]).

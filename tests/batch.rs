@@ -172,7 +172,7 @@ fn resume_skips_inputs_whose_results_are_saved() {
     );
     let saved: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("c01.xyz.json")).unwrap()).unwrap();
-    assert_eq!(saved["version"], 2);
+    assert_eq!(saved["version"], afford::report::JSON_VERSION);
     assert_eq!(saved["files"].as_array().unwrap().len(), 1);
     assert_eq!(saved["files"][0]["file"], s(&data.join("c01.xyz")));
 
@@ -283,6 +283,7 @@ fn each_table_is_written_as_its_file_ends() {
         summary: None,
         segments: None,
         mesh: None,
+        mesh_scene: false,
         config: Default::default(),
         input: Default::default(),
         progress: false,

@@ -87,7 +87,7 @@ fn outputs_follow_the_interfaces_and_do_not_depend_on_threads() {
     );
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(d.path().join("one.json")).unwrap()).unwrap();
-    assert_eq!(json["version"], 2);
+    assert_eq!(json["version"], afford::report::JSON_VERSION);
     let det = &json["files"][0]["detections"][0];
     assert_eq!(det["agent"], "human");
     assert_eq!(det["height"], 1.75);

@@ -743,8 +743,10 @@ fn typical_spacing(cloud: &PointCloud, n: usize, diag: f64) -> Option<f64> {
 /// Parses a 4x4 matrix from 16 numbers, row-major, separated by whitespace, commas or
 /// semicolons (brackets are ignored, `#` starts a comment to the end of the line): the
 /// text given inline or the content of a file. Units are those of the cloud after the
-/// units scaling (metres).
+/// units scaling (metres). A ScanNet `axisAlignment = ...` line, or a whole ScanNet meta
+/// file, gives the matrix of that line ([`super::scannet::axis_alignment`]).
 pub fn parse_matrix(text: &str) -> Result<Matrix4<f64>, String> {
+    let text = super::scannet::axis_alignment(text).unwrap_or(text);
     let mut values: Vec<f64> = Vec::new();
     for line in text.lines() {
         let line = line.split('#').next().unwrap_or("");

@@ -6,10 +6,16 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Point3;
 
+mod bag;
+pub mod depth;
+mod e57;
 pub mod frame;
 pub mod mesh;
 mod pcd;
 mod ply;
+pub mod pointcloud2;
+mod scannet;
+pub mod source;
 pub mod spacing;
 mod xyz;
 
@@ -21,6 +27,7 @@ pub use mesh::{expected_samples, read_mesh, sample_mesh, MAX_SAMPLES};
 pub use pcd::{read_pcd, write_pcd};
 pub use ply::{read_ply, read_ply_property, write_ply_points};
 pub(crate) use ply::{write_ply_typed, Scalar};
+pub use source::{read_parts, Intrinsics, Part, Pick, SourceOptions};
 pub use spacing::point_spacing;
 pub use xyz::read_xyz;
 
@@ -90,10 +97,19 @@ pub enum CloudError {
         /// What is wrong.
         what: String,
     },
+    /// The options do not fit the file (a topic or scan it lacks, a depth image without
+    /// intrinsics, several clouds where one is read).
+    #[error("{path}: {what}")]
+    Select {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong and how to fix it.
+        what: String,
+    },
     /// The file's extension names no format this tool reads.
     #[error(
-        "{path}: unknown point cloud format (expected .ply, .pcd, .xyz, .txt or .csv, or a \
-         mesh: .obj, .off or .stl)"
+        "{path}: unknown point cloud format (expected .ply, .pcd, .xyz, .txt, .csv, .e57, .mcap \
+         or a depth .png, or a mesh: .obj, .off or .stl)"
     )]
     UnknownFormat {
         /// The file.
@@ -101,11 +117,21 @@ pub enum CloudError {
     },
 }
 
-/// Reads a point cloud file, choosing the reader by extension (`.ply`, `.pcd`, `.xyz`/`.txt`/`.csv`).
+/// Reads a point cloud file, choosing the reader by extension (`.ply`, `.pcd`,
+/// `.xyz`/`.txt`/`.csv`; `.e57` merges every scan; a `.mcap` bag must hold one
+/// PointCloud2 message; see [`read_parts`] to choose among several clouds).
 ///
 /// Points with a non-finite coordinate are dropped and counted in [`LoadedCloud::dropped_non_finite`].
 pub fn load(path: &Path) -> Result<LoadedCloud, CloudError> {
     regular_file(path)?;
+    if source::needs_source(path) {
+        return Ok(source::load_one(path, &SourceOptions::default())?.cloud);
+    }
+    load_single(path)
+}
+
+/// The readers of formats with one cloud and no options (PLY, PCD, text).
+fn load_single(path: &Path) -> Result<LoadedCloud, CloudError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
