@@ -3,7 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::cloud::{self, CloudError, FrameError, FrameOptions, FrameReport, PointCloud};
+use crate::cloud::{
+    self, CloudError, FrameError, FrameOptions, FrameReport, LoadedCloud, PointCloud,
+};
 
 /// How input files are read and brought into the world frame.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -70,15 +72,25 @@ pub fn load_input(path: &Path, opts: &InputOptions) -> Result<Input, InputError>
     } else {
         cloud::load(path)?
     };
-    let untouched = opts.frame == FrameOptions::default();
+    to_input(path, loaded, &opts.frame)
+}
+
+/// Brings a cloud already read (finite points, as given) into the world frame with
+/// `frame`, and checks its units; `path` names it in messages (a file, or a name given
+/// to points held in memory). What [`load_input`] does after reading.
+pub fn to_input(
+    path: &Path,
+    loaded: LoadedCloud,
+    frame: &FrameOptions,
+) -> Result<Input, InputError> {
+    let untouched = *frame == FrameOptions::default();
     let (cloud, frame) = if untouched {
         (loaded.cloud, None)
     } else {
-        let (c, r) =
-            cloud::to_world(loaded.cloud, &opts.frame).map_err(|source| InputError::Frame {
-                path: path.to_path_buf(),
-                source,
-            })?;
+        let (c, r) = cloud::to_world(loaded.cloud, frame).map_err(|source| InputError::Frame {
+            path: path.to_path_buf(),
+            source,
+        })?;
         (c, Some(r))
     };
     let units_warning = cloud::check_units(&cloud).map(|w| format!("{}: {w}", path.display()));

@@ -15,6 +15,7 @@ pub mod batch;
 pub mod cli;
 pub mod cloud;
 pub mod detect;
+pub mod embed;
 pub mod eval;
 pub mod fit;
 pub mod fuzzy;
