@@ -26,6 +26,7 @@ import csv
 import io
 import json
 import os
+import signal
 import sys
 from dataclasses import dataclass, field
 from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple, Union
@@ -230,9 +231,8 @@ def _words(value: Union[str, Sequence[str]], what: str) -> List[str]:
 
 
 def _heights(heights: Union[float, Sequence[float]]) -> List[float]:
-    items = [heights] if isinstance(heights, (int, float)) else list(heights)
     try:
-        return [float(h) for h in items]
+        return [float(h) for h in np.atleast_1d(np.asarray(heights, dtype=np.float64))]
     except (TypeError, ValueError):
         raise ValueError(f"heights: expected numbers (metres), got {heights!r}") from None
 
@@ -259,8 +259,9 @@ def _frame(up: str, units: str, camera: bool, floor: Optional[str], transform: A
 
 def _points(points: Any) -> np.ndarray:
     a = np.asarray(points)
-    if a.dtype not in (np.float32, np.float64):
-        if a.dtype.kind in "iub":
+    if a.dtype not in (np.dtype(np.float32), np.dtype(np.float64)):
+        # Other real numbers (integers, float16, another byte order) convert exactly.
+        if a.dtype.kind in "iuf":
             a = a.astype(np.float64)
         else:
             raise ValueError(f"points: expected float32 or float64 numbers, got dtype {a.dtype}")
@@ -386,5 +387,8 @@ def read(
 
 def _main() -> None:
     """The ``afford`` command line (the console script of the wheel)."""
+    # Ctrl-C ends the command at once, as it does the native binary (Python's own handler
+    # would only be looked at after the native call returns).
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
     sys.stdout.flush()
     sys.exit(_native.cli_main(["afford", *sys.argv[1:]]))

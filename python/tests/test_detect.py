@@ -77,6 +77,13 @@ def test_float32_float64_c_and_fortran_agree(points, result, dtype, order):
     assert afford.detect(a, name=NAME) == result
 
 
+def test_other_real_dtypes_and_array_likes_convert(points, result):
+    big_endian = np.array(points, dtype=">f8")
+    assert afford.detect(big_endian, name=NAME) == result
+    small = points[:2000]
+    assert afford.detect(small.tolist()) == afford.detect(small)
+
+
 def test_threads_1_and_2_give_the_same(points):
     one = afford.detect(points, threads=1)
     two = afford.detect(points, threads=2)
@@ -169,6 +176,8 @@ def test_bad_arguments_are_value_errors_in_the_cli_words(points):
         afford.detect(points, units="inch")
     with pytest.raises(ValueError, match="17.5 m is outside 0.3-3.0 m"):
         afford.detect(points, heights=17.5)
+    with pytest.raises(ValueError, match="heights: expected numbers"):
+        afford.detect(points, heights="tall")
     with pytest.raises(ValueError, match="threads"):
         afford.detect(points, threads=0)
     with pytest.raises(ValueError, match="transform"):
