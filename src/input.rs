@@ -3,7 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::cloud::{self, CloudError, FrameError, FrameOptions, FrameReport, PointCloud};
+use crate::cloud::{
+    self, CloudError, FrameError, FrameOptions, FrameReport, LoadedCloud, PointCloud,
+};
 
 /// How input files are read and brought into the world frame.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -123,6 +125,17 @@ pub fn load_inputs(
     Ok(cloud::read_parts(path, &opts.source, &mut |p| {
         each(to_input(p))
     })?)
+}
+
+/// Brings a cloud already read (finite points, as given) into the world frame with
+/// `frame`, and checks its units; `path` names it in messages (a file, or a name given
+/// to points held in memory). What [`load_inputs`] does after reading.
+pub fn to_input(
+    path: &Path,
+    loaded: LoadedCloud,
+    frame: &FrameOptions,
+) -> Result<Input, InputError> {
+    world(path, None, loaded, frame)
 }
 
 /// Brings one cloud of `path` into the world frame.

@@ -16,6 +16,7 @@ pub mod batch;
 pub mod cli;
 pub mod cloud;
 pub mod detect;
+pub mod embed;
 pub mod eval;
 pub mod extent;
 pub mod fit;
