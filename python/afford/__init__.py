@@ -75,7 +75,8 @@ class Detection:
     back to the input frame with ``Result.transform``). ``yaw_deg`` is the heading about
     z (0 faces +x). ``score`` is the accumulated score (paper Eq. 5), ``stability`` Eq. 1,
     ``availability`` the hypothesis availability (Fig. 5d). ``pose_deg`` gives every
-    joint's angle of the goal pose. ``segment`` holds the input rows of the points grown
+    joint's angle of the goal pose and ``joints`` every joint's position in the world
+    frame, metres (the ``--json`` document's ``joints``). ``segment`` holds the input rows of the points grown
     from this detection (its own run's segment).
     """
 
@@ -91,6 +92,7 @@ class Detection:
     availability: float
     local_scores: Dict[str, float]
     pose_deg: Dict[str, float]
+    joints: Dict[str, Tuple[float, float, float]]
     segment_points: int
     segment: np.ndarray = field(repr=False)
 
@@ -151,6 +153,7 @@ class Result:
                 availability=d["availability"],
                 local_scores=dict(d["local_scores"]),
                 pose_deg=dict(d["pose_deg"]),
+                joints={n: tuple(p) for n, p in d["joints"]},
                 segment_points=d["segment_points"],
                 segment=d["segment"],
             )

@@ -137,6 +137,12 @@ fn detection_dict<'py>(
     o.set_item("affordances", &d.affordances)?;
     o.set_item("local_scores", d.local_scores.clone())?;
     o.set_item("pose_deg", d.pose.clone())?;
+    let joints: Vec<(String, [f64; 3])> = d
+        .joints
+        .iter()
+        .map(|(n, p)| (n.clone(), [p.x, p.y, p.z]))
+        .collect();
+    o.set_item("joints", joints)?;
     o.set_item("score", d.score)?;
     o.set_item("stability", d.stability)?;
     o.set_item("availability", d.availability)?;
@@ -269,6 +275,7 @@ fn detect_file<'py>(
     let opts = InputOptions {
         frame: frame_options(up, units, camera, floor, transform)?,
         sample,
+        source: Default::default(),
     };
     let models = models(heights, agents, affordances)?;
     let cfg = DetectConfig::default();
@@ -298,6 +305,7 @@ fn read<'py>(
     let opts = InputOptions {
         frame: frame_options(up, units, camera, floor, transform)?,
         sample,
+        source: Default::default(),
     };
     let input = py
         .detach(|| load_input(Path::new(path), &opts))
@@ -346,6 +354,10 @@ fn report_of(d: &Bound<'_, PyDict>) -> PyResult<FileReport> {
             affordances: get(x, "affordances")?,
             local_scores: get(x, "local_scores")?,
             pose: get(x, "pose_deg")?,
+            joints: get::<Vec<(String, [f64; 3])>>(x, "joints")?
+                .into_iter()
+                .map(|(n, [jx, jy, jz])| (n, Point3::new(jx, jy, jz)))
+                .collect(),
             score: get(x, "score")?,
             stability: get(x, "stability")?,
             availability: get(x, "availability")?,
