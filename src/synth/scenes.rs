@@ -92,9 +92,20 @@ mod tests {
     fn scenes_have_the_sizes_they_claim() {
         let scenes = speed_scenes();
         let size = |name: &str| scenes.iter().find(|(n, _)| *n == name).unwrap().1.len();
-        assert!((100_000..=300_000).contains(&size("chair_view")), "{}", size("chair_view"));
-        assert!((200_000..=300_000).contains(&size("room_view")), "{}", size("room_view"));
+        assert!(
+            (100_000..=300_000).contains(&size("chair_view")),
+            "{}",
+            size("chair_view")
+        );
+        assert!(
+            (200_000..=300_000).contains(&size("room_view")),
+            "{}",
+            size("room_view")
+        );
         let scan = size("room_scan") as f64;
-        assert!((scan - ROOM_SCAN_POINTS).abs() < 0.02 * ROOM_SCAN_POINTS, "{scan}");
+        assert!(
+            (scan - ROOM_SCAN_POINTS).abs() < 0.02 * ROOM_SCAN_POINTS,
+            "{scan}"
+        );
     }
 }
