@@ -59,7 +59,7 @@ impl Scene {
             .iter()
             .map(|p| {
                 let l = (p.coords - origin) / v;
-                [l.x.floor() as i64, l.y.floor() as i64, l.z.floor() as i64]
+                cell_of(&l)
             })
             .collect();
         keys.sort_unstable();
@@ -125,7 +125,7 @@ impl Scene {
         let v = self.voxel;
         let half_diag = v * 3f64.sqrt() / 2.0;
         let l = (p.coords - self.origin) / v;
-        let k = [l.x.floor() as i64, l.y.floor() as i64, l.z.floor() as i64];
+        let k = cell_of(&l);
         match field.get(k) {
             // Quantising p to its cell centre costs half a diagonal; the voxel's extent another.
             Some(d) => d as f64 - 2.0 * half_diag,
@@ -162,18 +162,122 @@ impl Scene {
     }
 
     /// Exact test: does the body part `c` intersect an occupied voxel or the floor?
-    /// (parry3d `intersection_test` of a cylinder against the `Voxels` shape.)
+    ///
+    /// The answer is parry3d's `intersection_test` of a cylinder against the `Voxels`
+    /// shape, which tests every occupied voxel in the cylinder's bounding box with GJK.
+    /// The same voxels are visited here (found through the distance field, which skips
+    /// runs of free cells), but voxels whose centre lies deep inside the cylinder, or
+    /// whose bounding sphere is clear of the cylinder's capsule, are decided by
+    /// geometry with a margin of [`DECIDE_MARGIN`]; only the voxels between are handed
+    /// to parry's GJK, with the poses parry itself would use.
     pub fn intersects(&self, c: &Cylinder) -> bool {
+        if self.floor && floor_gap(c) < 0.0 {
+            return true;
+        }
+        let (Some(voxels), Some(field)) = (&self.voxels, &self.field) else {
+            return false;
+        };
+        let Some((pose, shape)) = self.parry_cylinder(c) else {
+            return false;
+        };
+        // Certainly touching: an axis point, away from the ends and the surface by the
+        // margin, lies in an occupied voxel (the cylinder holds a ball around it).
+        let axis = c.b - c.a;
+        let len = axis.norm();
+        if c.radius > DECIDE_MARGIN && len > 2.0 * DECIDE_MARGIN {
+            let n = (len / self.voxel).ceil() as usize;
+            let inner = len - 2.0 * DECIDE_MARGIN;
+            for i in 0..=n {
+                let p = c.a + axis * ((DECIDE_MARGIN + inner * i as f64 / n as f64) / len);
+                if field.get(cell_of(&((p.coords - self.origin) / self.voxel))) == Some(0.0) {
+                    return true;
+                }
+            }
+        }
+        use parry3d::query::QueryDispatcher;
+        use parry3d::shape::Shape;
+        // As parry's `intersection_test` and `intersection_test_voxels_shape` compute them.
+        let pos12 = Pose::IDENTITY.inv_mul(&pose);
+        let Some(aabb) = voxels
+            .local_aabb()
+            .intersection(&shape.compute_aabb(&pos12))
+        else {
+            return false;
+        };
+        let [mins, maxs] = voxels.voxel_range_intersecting_local_aabb(&aabb);
+        let lo = [mins.x as i64, mins.y as i64, mins.z as i64];
+        let hi = [maxs.x as i64, maxs.y as i64, maxs.z as i64];
+        let t = pos12.translation;
+        let u = pos12.rotation * Vector::Y;
+        let (t, u) = (
+            Vector3::new(t.x as f64, t.y as f64, t.z as f64),
+            Vector3::new(u.x as f64, u.y as f64, u.z as f64),
+        );
+        let (hh, r) = (shape.half_height as f64, shape.radius as f64);
+        let size = voxels.voxel_size();
+        let half_diag = (size.x as f64).hypot(size.y as f64).hypot(size.z as f64) / 2.0;
+        let centre =
+            |k: [i64; 3]| voxels.voxel_center(IVector::new(k[0] as i32, k[1] as i32, k[2] as i32));
+        // Where the voxel centred at `p` stands against the cylinder.
+        let clear2 = (r + half_diag + DECIDE_MARGIN).powi(2);
+        let inside2 = (r - DECIDE_MARGIN).max(0.0).powi(2);
+        let classify = |k: [i64; 3]| {
+            let p = centre(k);
+            let w = Vector3::new(p.x as f64, p.y as f64, p.z as f64) - t;
+            let along = w.dot(&u);
+            let perp2 = w.norm_squared() - along * along;
+            let beyond = (along.abs() - hh).max(0.0);
+            if perp2 + beyond * beyond > clear2 {
+                Side::Clear
+            } else if along.abs() < hh - DECIDE_MARGIN && perp2 < inside2 {
+                Side::Inside
+            } else {
+                Side::Boundary
+            }
+        };
+        // The box is walked in lines along the grid axis nearest to the cylinder's (the
+        // fewest lines for a long part), skipping free runs by their distance.
+        let a = (0..3)
+            .max_by(|&i, &j| u[i].abs().total_cmp(&u[j].abs()))
+            .unwrap_or(0);
+        let axes = [a, (a + 1) % 3, (a + 2) % 3];
+        let cuboid = parry3d::shape::Cuboid::new(size / 2.0);
+        field.any_occupied(lo, hi, axes, self.voxel, |k| match classify(k) {
+            Side::Inside => true,
+            Side::Clear => false,
+            Side::Boundary => {
+                let pose12 = Pose::from_translation(-centre(k)) * pos12;
+                parry3d::query::DefaultQueryDispatcher
+                    .intersection_test(&pose12, &cuboid, &shape)
+                    .is_ok_and(|r| r.intersecting)
+            }
+        })
+    }
+
+    /// The same test made by parry3d alone (`intersection_test` of the cylinder against
+    /// the whole `Voxels` shape): the reference [`Scene::intersects`] must agree with.
+    pub fn intersects_parry(&self, c: &Cylinder) -> bool {
         if self.floor && floor_gap(c) < 0.0 {
             return true;
         }
         let Some(voxels) = &self.voxels else {
             return false;
         };
+        let Some((pose, shape)) = self.parry_cylinder(c) else {
+            return false;
+        };
+        parry3d::query::intersection_test(&Pose::IDENTITY, voxels, &pose, &shape)
+            .map(|r| r.intersecting)
+            .unwrap_or(false)
+    }
+
+    /// The body part as a parry cylinder and its pose in the local (f32) frame; `None` for
+    /// a part of no length.
+    fn parry_cylinder(&self, c: &Cylinder) -> Option<(Pose, ParryCylinder)> {
         let axis = c.b - c.a;
         let len = axis.norm();
         if len < 1e-9 {
-            return false;
+            return None;
         }
         let mid = nalgebra::center(&c.a, &c.b).coords - self.origin;
         let dir = axis / len;
@@ -182,10 +286,10 @@ impl Scene {
             Vector::new(dir.x as f32, dir.y as f32, dir.z as f32),
         );
         let pose = Pose::from_parts(Vector::new(mid.x as f32, mid.y as f32, mid.z as f32), rot);
-        let shape = ParryCylinder::new((len / 2.0) as f32, c.radius as f32);
-        parry3d::query::intersection_test(&Pose::IDENTITY, voxels, &pose, &shape)
-            .map(|r| r.intersecting)
-            .unwrap_or(false)
+        Some((
+            pose,
+            ParryCylinder::new((len / 2.0) as f32, c.radius as f32),
+        ))
     }
 
     /// The direction (unit, world) in which the scene falls away from the body part `c` where
@@ -201,7 +305,7 @@ impl Scene {
         let v = self.voxel;
         let key = |p: &Point3<f64>| {
             let l = (p.coords - self.origin) / v;
-            [l.x.floor() as i64, l.y.floor() as i64, l.z.floor() as i64]
+            cell_of(&l)
         };
         let axis = c.b - c.a;
         let n = ((axis.norm() / v).ceil() as usize).max(1);
@@ -262,7 +366,7 @@ impl Scene {
         let d = match (&self.field, self.occupied) {
             (Some(f), Some(_)) => {
                 let l = (p.coords - self.origin) / self.voxel;
-                match f.get([l.x.floor() as i64, l.y.floor() as i64, l.z.floor() as i64]) {
+                match f.get(cell_of(&l)) {
                     Some(d) => d as f64 - self.voxel / 2.0 - radius,
                     None => self.point_clearance(p) - radius,
                 }
@@ -335,6 +439,34 @@ impl Scene {
     }
 }
 
+/// Geometric margin (metres) by which a voxel must be inside a cylinder, or clear of it,
+/// to be decided without GJK: a thousand times the f32 rounding of room-sized coordinates,
+/// so only voxels that GJK itself would decide the same way are skipped.
+const DECIDE_MARGIN: f64 = 1e-3;
+
+/// Where a voxel stands against a cylinder, by its centre.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Side {
+    /// Its bounding sphere is clear of the cylinder's capsule by the margin.
+    Clear,
+    /// Its centre is inside the cylinder by the margin.
+    Inside,
+    /// Neither: GJK decides.
+    Boundary,
+}
+
+/// `v.floor() as i64` without a call to libm's `floor` (x86-64 without SSE4.1 has no
+/// rounding instruction): the same value for every `v` (saturating as `as` does).
+fn floor_i64(v: f64) -> i64 {
+    let t = v as i64;
+    t.saturating_sub(((t as f64) > v) as i64)
+}
+
+/// The grid cell of a position given in voxel units (local frame).
+fn cell_of(l: &Vector3<f64>) -> [i64; 3] {
+    [floor_i64(l.x), floor_i64(l.y), floor_i64(l.z)]
+}
+
 /// Height of the lowest point of a cylinder above z = 0, metres (negative below the floor).
 fn floor_gap(c: &Cylinder) -> f64 {
     let axis = c.b - c.a;
@@ -375,16 +507,20 @@ impl DistanceField {
                 vec![0f32; longest + 1],
             )
         };
-        // Along x: rows are contiguous.
-        d.par_chunks_mut(nx)
-            .for_each_init(scratch, |(f, out, vs, zs), row| {
-                f[..nx].copy_from_slice(row);
-                edt_1d(&f[..nx], &mut out[..nx], vs, zs);
-                row.copy_from_slice(&out[..nx]);
-            });
-        // Along y: within each z slab.
+        // Along x: rows are contiguous and hold only 0 (occupied) or FAR, so the nearest
+        // occupied cell on either side gives the exact squared distance (the value
+        // `edt_1d` computes, in a fraction of its time).
+        d.par_chunks_mut(nx).for_each(nearest_in_row);
+        // Along y: within each z slab. A slab without occupied cells is FAR after the
+        // first pass and stays FAR (the transform of a constant FAR line is FAR).
+        let mut slab_used = vec![false; nz];
+        for k in keys {
+            slab_used[(k[2] - min[2]) as usize] = true;
+        }
         d.par_chunks_mut(nx * ny)
-            .for_each_init(scratch, |(f, out, vs, zs), slab| {
+            .zip(slab_used.par_iter())
+            .filter(|(_, used)| **used)
+            .for_each_init(scratch, |(f, out, vs, zs), (slab, _)| {
                 for x in 0..nx {
                     for y in 0..ny {
                         f[y] = slab[y * nx + x];
@@ -420,6 +556,53 @@ impl DistanceField {
         DistanceField { min, dims, dist }
     }
 
+    /// Calls `visit` on the occupied cells (distance 0) with keys in the half-open box
+    /// `lo..hi` until it returns true; returns whether it did. The box is walked in lines
+    /// along axis `axes[0]`, one per cell of the other two; `voxel` is the cell size,
+    /// metres.
+    fn any_occupied(
+        &self,
+        lo: [i64; 3],
+        hi: [i64; 3],
+        axes: [usize; 3],
+        voxel: f64,
+        mut visit: impl FnMut([i64; 3]) -> bool,
+    ) -> bool {
+        // A free cell at distance d (metres) from the nearest occupied cell centre has
+        // only free cells within d / voxel steps of it: skip them (a little less, against
+        // the f32 rounding of d, which is far below 1e-5 relative).
+        let steps_per_metre = ((1.0 - 1e-5) / voxel) as f32;
+        let [nx, _, nz] = self.dims;
+        // Index steps of x, y and z in the y-major layout.
+        let stride = [1, nz * nx, nx];
+        let min = self.min;
+        let lo = [0, 1, 2].map(|i| (lo[i] - min[i]).max(0));
+        let hi = [0, 1, 2].map(|i| (hi[i] - min[i]).min(self.dims[i] as i64));
+        let [a, b, c] = axes;
+        let mut key = [0i64; 3];
+        for kb in lo[b]..hi[b] {
+            for kc in lo[c]..hi[c] {
+                let base = kb as usize * stride[b] + kc as usize * stride[c];
+                let (mut x, end) = (lo[a], hi[a]);
+                while x < end {
+                    let d = self.dist[base + x as usize * stride[a]];
+                    if d == 0.0 {
+                        key[a] = x + min[a];
+                        key[b] = kb + min[b];
+                        key[c] = kc + min[c];
+                        if visit(key) {
+                            return true;
+                        }
+                        x += 1;
+                    } else {
+                        x += ((d * steps_per_metre) as i64).clamp(1, end - x);
+                    }
+                }
+            }
+        }
+        false
+    }
+
     fn get(&self, k: [i64; 3]) -> Option<f32> {
         let mut idx = [0usize; 3];
         for a in 0..3 {
@@ -430,6 +613,28 @@ impl DistanceField {
             idx[a] = i as usize;
         }
         Some(self.dist[(idx[1] * self.dims[2] + idx[2]) * self.dims[0] + idx[0]])
+    }
+}
+
+/// Squared distances (in cells) along a row of 0 (occupied) and FAR cells to its nearest
+/// occupied cell, in place; a row without one stays FAR. Equal, bit for bit, to
+/// [`edt_1d`] of the row (both are exact: squared distances are small integers in f32).
+fn nearest_in_row(row: &mut [f32]) {
+    let mut last = None;
+    for (x, d) in row.iter_mut().enumerate() {
+        if *d == 0.0 {
+            last = Some(x);
+        } else if let Some(p) = last {
+            *d = ((x - p) * (x - p)) as f32;
+        }
+    }
+    let mut next = None;
+    for (x, d) in row.iter_mut().enumerate().rev() {
+        if *d == 0.0 {
+            next = Some(x);
+        } else if let Some(p) = next {
+            *d = d.min(((p - x) * (p - x)) as f32);
+        }
     }
 }
 
@@ -522,6 +727,40 @@ mod tests {
     }
 
     #[test]
+    fn row_shortcut_equals_the_transform_bit_for_bit() {
+        const FAR: f32 = 1e20;
+        let mut state = 99u64;
+        for n in [1usize, 2, 7, 64, 301] {
+            for density in [0.0, 0.01, 0.1, 0.5] {
+                let mut row: Vec<f32> = (0..n)
+                    .map(|_| {
+                        state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
+                        if ((state >> 33) as f64 / (1u64 << 31) as f64) < density {
+                            0.0
+                        } else {
+                            FAR
+                        }
+                    })
+                    .collect();
+                let mut want = vec![0.0; n];
+                let (mut v, mut z) = (vec![0; n], vec![0.0; n + 1]);
+                edt_1d(&row, &mut want, &mut v, &mut z);
+                nearest_in_row(&mut row);
+                let (got, want): (Vec<u32>, Vec<u32>) = (
+                    row.iter().map(|d| d.to_bits()).collect(),
+                    want.iter().map(|d| d.to_bits()).collect(),
+                );
+                assert_eq!(got, want, "n {n}, density {density}");
+            }
+        }
+        // A constant FAR line stays FAR (empty slabs are skipped on that ground).
+        let f = vec![FAR; 50];
+        let mut d = vec![0.0; 50];
+        edt_1d(&f, &mut d, &mut vec![0; 50], &mut vec![0.0; 51]);
+        assert!(d.iter().all(|&x| x == FAR));
+    }
+
+    #[test]
     fn clearance_is_a_lower_bound_and_tight_far_away() {
         let s = Scene::new(&slab(0.45), &cfg(false));
         // A ball-like short cylinder 0.2 m above the slab: the true gap is about 0.2 - r.
@@ -549,6 +788,52 @@ mod tests {
         };
         assert!(s.intersects(&lying));
         assert!((s.clearance(&lying) + 0.01).abs() < 1e-9);
+    }
+
+    #[test]
+    fn field_guided_test_agrees_with_parry_alone() {
+        // A slab, a post and a wall; cylinders of every orientation (and along the grid
+        // axes), length and radius around them, many grazing: both tests must give the same
+        // answer for each.
+        let mut pts = slab(0.45).points;
+        for k in 0..80 {
+            pts.push(Point3::new(0.9, 0.2, k as f64 * 0.01));
+            for j in 0..60 {
+                pts.push(Point3::new(-0.3, j as f64 * 0.01, k as f64 * 0.01));
+            }
+        }
+        let s = Scene::new(&PointCloud::new(pts), &cfg(false));
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut hits, mut misses) = (0, 0);
+        for i in 0..4000 {
+            let a = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, next() * 0.9);
+            let mut d = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * next();
+            if i % 4 == 0 {
+                // Every fourth along a grid axis (legs hang straight down).
+                let k = i / 4 % 3;
+                d = Vector3::ith(k, d[k]);
+            }
+            let c = Cylinder {
+                joint: 0,
+                a,
+                b: a + d,
+                radius: 0.01 + next() * 0.08,
+            };
+            let want = s.intersects_parry(&c);
+            assert_eq!(s.intersects(&c), want, "{c:?}");
+            if want {
+                hits += 1;
+            } else {
+                misses += 1;
+            }
+        }
+        assert!(hits > 500 && misses > 500, "{hits} hits, {misses} misses");
     }
 
     #[test]

@@ -3,6 +3,7 @@
 //! afford each detection are grown from it.
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 use nalgebra::Point3;
 
@@ -54,7 +55,8 @@ pub fn segment(
             (p.z / cell).floor() as i64,
         )
     };
-    let mut grid: HashMap<(i64, i64, i64), Vec<usize>> = HashMap::new();
+    let mut grid: HashMap<(i64, i64, i64), Vec<usize>, BuildHasherDefault<CellHasher>> =
+        HashMap::default();
     for (i, p) in cloud.points.iter().enumerate() {
         if p.z >= cfg.floor_height {
             grid.entry(key(p)).or_default().push(i);
@@ -109,6 +111,33 @@ pub fn segment(
         }
     }
     label
+}
+
+/// A multiplicative hasher for integer cell keys (the Fx hash of rustc): the grid is
+/// looked up 27 times per grown point, and SipHash's protection against chosen keys is of
+/// no use for cells of a point cloud. Only lookups depend on it, never an order.
+#[derive(Default)]
+struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.write_u64(*b as u64);
+        }
+    }
+
+    fn write_i64(&mut self, i: i64) {
+        self.write_u64(i as u64);
+    }
+
+    fn write_u64(&mut self, i: u64) {
+        const K: u64 = 0x517c_c1b7_2722_0a95;
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(K);
+    }
 }
 
 #[cfg(test)]
