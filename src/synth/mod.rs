@@ -11,6 +11,7 @@ pub mod dataset;
 pub mod furniture;
 pub mod mesh;
 pub mod meshio;
+pub mod wide;
 
 pub use furniture::*;
 pub use mesh::{sample_surface, Mesh, Part};
