@@ -11,7 +11,7 @@
 //!   height are sittable by geometry but negative by convention: `sitting` 0 and a
 //!   non-empty `doubtful` column, so that evaluation can report them apart;
 //! * `backrest`: a back reaching at least 0.25 m above the seat, or (kind `wall`) a wall within
-//!   0.15 m behind a backless seat;
+//!   0.15 m behind a backless seat (not a bed's: see [`wall_backs`]);
 //! * `armrest`: arms 0.12–0.35 m above the seat, on the seat's sides;
 //! * `headrest`: a back reaching at least 0.70 m above the seat, or (kind `wall`) the wall
 //!   0-0.15 m behind the seat;
@@ -2172,5 +2172,62 @@ mod tests {
         assert_eq!(read_labels(&a.labels_csv).unwrap(), a.rows);
         assert_eq!(text.lines().count(), 7);
         assert_eq!(text, std::fs::read_to_string(&b.labels_csv).unwrap());
+    }
+    #[test]
+    fn wide_sets_name_their_frame_and_differ_from_the_default() {
+        let spec = DatasetSpec {
+            full: 1,
+            view: 1,
+            wall: 0,
+            room: 2,
+            stride: 16,
+            pcd_every: 0,
+            mix: Mix::Wide,
+            ..DatasetSpec::default()
+        };
+        let d = tempfile::tempdir().unwrap();
+        let a = generate(d.path(), 4, &spec).unwrap();
+        let kinds: Vec<&str> = a.rows.iter().map(|r| r.kind.as_str()).collect();
+        assert_eq!(kinds, ["full", "view", "room", "scan"]);
+        assert!(a.rows.iter().all(|r| r.frame.as_deref() == Some("world")));
+        let text = std::fs::read_to_string(&a.labels_csv).unwrap();
+        assert!(text.lines().next().unwrap().ends_with(",raised_legs,frame"));
+        assert_eq!(read_labels(&a.labels_csv).unwrap(), a.rows);
+        let cam = DatasetSpec {
+            frame: OutFrame::Camera,
+            ..spec.clone()
+        };
+        let c = generate(&d.path().join("cam"), 4, &cam).unwrap();
+        assert!(c.rows.iter().all(|r| r.frame.as_deref() == Some("camera")));
+        // The same scenes, other coordinates.
+        for (x, y) in a.rows.iter().zip(&c.rows) {
+            assert_eq!((x.points, x.labels), (y.points, y.labels));
+            let pa = cloud::load(&d.path().join(&x.file)).unwrap().cloud;
+            let pc = cloud::load(&d.path().join("cam").join(&y.file))
+                .unwrap()
+                .cloud;
+            assert_ne!(pa.points, pc.points);
+        }
+        // A default set writes no frame column.
+        let def = generate(
+            &d.path().join("def"),
+            4,
+            &DatasetSpec {
+                mix: Mix::Default,
+                ..spec
+            },
+        )
+        .unwrap();
+        assert!(def.rows.iter().all(|r| r.frame.is_none()));
+    }
+
+    #[test]
+    fn a_bed_against_a_wall_gets_no_backrest() {
+        let spec = DatasetSpec::default();
+        for seed in 0..5 {
+            let s = one_scene(SceneKind::Wall, Class::Bed, seed, &spec);
+            assert!(!s.labels.backrest && !s.labels.headrest && !s.labels.armrest);
+        }
+        assert!(wall_backs(Class::Toilet) && !wall_backs(Class::BunkBed));
     }
 }
