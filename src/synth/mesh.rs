@@ -400,7 +400,7 @@ pub fn sample_vertex_grid(
     }
     let density = VERTEX_GRID_OVERSAMPLING / (spacing * spacing);
     let (dense, parts) = sample_surface(mesh, density, 0.0, seed);
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5EED_0F_6A1D);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x005E_ED0F_6A1D);
     let offset = Vector3::new(
         rng.random::<f64>(),
         rng.random::<f64>(),
