@@ -34,7 +34,7 @@ fn stages(c: &mut Criterion) {
         cloud::write_ply_points(&path, &cloud.points, &[], true).unwrap();
         g.bench_function("load_ply", |b| b.iter(|| cloud::load(&path).unwrap()));
         g.bench_function("heightmap", |b| {
-            b.iter(|| afford::heightmap::HeightMap::from_cloud(&cloud, cfg.heightmap_cell))
+            b.iter(|| afford::heightmap::HeightMap::from_cloud(&cloud, &cfg.heightmap))
         });
         g.bench_function("scene", |b| b.iter(|| Scene::new(&cloud, &cfg.scene)));
         let prepared = prepare(&cloud, &cfg);

@@ -73,6 +73,15 @@ struct SynthArgs {
     /// Depth-camera pixel stride (1 = 640 x 480 rays, 2 = 320 x 240, ...).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=16))]
     stride: u32,
+    /// Which world: `default` (the README tables' mix, same bytes per seed) or `wide`
+    /// (ceilings, overhangs, reconstructed and subsampled clouds, pitched cameras, dressed
+    /// beds, new furniture; README "Synthetic data").
+    #[arg(long, default_value = "default", value_parser = ["default", "wide"])]
+    mix: String,
+    /// Frame of the written clouds: `world` (z up, floor at 0) or `camera` (each scene in
+    /// its depth camera's frame; evaluate with --camera --floor auto).
+    #[arg(long, default_value = "world", value_parser = ["world", "camera"])]
+    frame: String,
 }
 
 #[derive(clap::Args)]
@@ -421,6 +430,8 @@ where
                     models: a.models,
                     views: a.views,
                     stride: a.stride,
+                    wide: a.mix == "wide",
+                    camera_frame: a.frame == "camera",
                 },
                 &mut std::io::stdout().lock(),
                 &mut std::io::stderr().lock(),

@@ -723,6 +723,10 @@ pub struct SynthRequest {
     pub views: usize,
     /// Depth-camera pixel stride for generated scenes.
     pub stride: u32,
+    /// Draw from the wide mix (`--mix wide`).
+    pub wide: bool,
+    /// Write clouds in their camera's frame (`--frame camera`).
+    pub camera_frame: bool,
 }
 
 /// Runs `afford synth`; returns the exit code.
@@ -768,6 +772,16 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
     }
     let mut spec = dataset::DatasetSpec {
         stride: req.stride,
+        mix: if req.wide {
+            dataset::Mix::Wide
+        } else {
+            dataset::Mix::Default
+        },
+        frame: if req.camera_frame {
+            dataset::OutFrame::Camera
+        } else {
+            dataset::OutFrame::World
+        },
         ..Default::default()
     };
     if let Some(c) = &req.count {
@@ -786,6 +800,13 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
                 s.rows.len(),
                 s.labels_csv.display()
             );
+            if req.camera_frame {
+                let _ = writeln!(
+                    out,
+                    "clouds are in their cameras' frames: afford eval {} --camera --floor auto",
+                    s.labels_csv.display()
+                );
+            }
             0
         }
         Err(e) => {

@@ -11,7 +11,7 @@
 //!   height are sittable by geometry but negative by convention: `sitting` 0 and a
 //!   non-empty `doubtful` column, so that evaluation can report them apart;
 //! * `backrest`: a back reaching at least 0.25 m above the seat, or (kind `wall`) a wall within
-//!   0.15 m behind a backless seat;
+//!   0.15 m behind a backless seat (not a bed's: see [`wall_backs`]);
 //! * `armrest`: arms 0.12–0.35 m above the seat, on the seat's sides;
 //! * `headrest`: a back reaching at least 0.70 m above the seat, or (kind `wall`) the wall
 //!   0-0.15 m behind the seat;
@@ -210,6 +210,23 @@ pub enum Class {
     Lamp,
     /// Low (coffee) table at seat height: doubtful.
     LowTable,
+    /// Wooden armchair whose arm rails rest on the front posts (`--mix wide`).
+    WoodenArmchair,
+    /// Upholstered wingback chair: high back with wings, arms (`--mix wide`).
+    Wingback,
+    /// Tub chair: a round seat in a curved shell whose back runs into the arms
+    /// (`--mix wide`).
+    TubChair,
+    /// Toilet: seat ring, bowl, tank or raised lid behind (`--mix wide`).
+    Toilet,
+    /// Night stand, alone or beside a bed: negative (`--mix wide`).
+    NightStand,
+    /// Bunk bed: the upper bunk over the lower one (`--mix wide`).
+    BunkBed,
+    /// Dining table with chairs pushed under its top (`--mix wide`).
+    TableWithChairs,
+    /// Bench against a wall with a shelf over it (`--mix wide`).
+    BenchUnderShelf,
 }
 
 /// Every class, in a fixed order.
@@ -258,13 +275,25 @@ impl Class {
             Class::Radiator => "radiator",
             Class::Lamp => "lamp",
             Class::LowTable => "low_table",
+            Class::WoodenArmchair => "wooden_armchair",
+            Class::Wingback => "wingback",
+            Class::TubChair => "tub_chair",
+            Class::Toilet => "toilet",
+            Class::NightStand => "night_stand",
+            Class::BunkBed => "bunk_bed",
+            Class::TableWithChairs => "table_chairs",
+            Class::BenchUnderShelf => "bench_shelf",
         }
     }
 
     /// Relative frequency in generated datasets.
-    fn weight(self) -> usize {
+    pub(super) fn weight(self) -> usize {
         match self {
-            Class::Chair | Class::Armchair | Class::Sofa => 3,
+            Class::Chair
+            | Class::Armchair
+            | Class::Sofa
+            | Class::WoodenArmchair
+            | Class::TableWithChairs => 3,
             Class::Stool
             | Class::HighBackChair
             | Class::Bench
@@ -273,7 +302,12 @@ impl Class {
             | Class::Recliner
             | Class::BarStool
             | Class::DiningTable
-            | Class::LowTable => 2,
+            | Class::LowTable
+            | Class::Wingback
+            | Class::TubChair
+            | Class::Toilet
+            | Class::BunkBed
+            | Class::BenchUnderShelf => 2,
             _ => 1,
         }
     }
@@ -294,15 +328,15 @@ pub struct Object {
     pub focus_height: f64,
 }
 
-fn u(rng: &mut ChaCha8Rng, a: f64, b: f64) -> f64 {
+pub(super) fn u(rng: &mut ChaCha8Rng, a: f64, b: f64) -> f64 {
     a + (b - a) * rng.random::<f64>()
 }
 
-fn chance(rng: &mut ChaCha8Rng, p: f64) -> bool {
+pub(super) fn chance(rng: &mut ChaCha8Rng, p: f64) -> bool {
     rng.random::<f64>() < p
 }
 
-fn p3(x: f64, y: f64, z: f64) -> Point3<f64> {
+pub(super) fn p3(x: f64, y: f64, z: f64) -> Point3<f64> {
     Point3::new(x, y, z)
 }
 
@@ -310,7 +344,7 @@ fn p3(x: f64, y: f64, z: f64) -> Point3<f64> {
 /// z = `z_base` (its front face passes through that line), spanning heights `z0..z1`
 /// vertically, `y0..y1` across and `thick` deep.
 #[allow(clippy::too_many_arguments)]
-fn tilted_box(
+pub(super) fn tilted_box(
     m: &mut Mesh,
     x_front: f64,
     z_base: f64,
@@ -339,7 +373,14 @@ fn tilted_box(
 /// A back rising from `x_front` (the seat's rear edge) at the seat top `seat`, `h` above
 /// it, `width` wide, solid or slatted; parts above 0.60 m over the seat are headrest
 /// when `h >= 0.70`.
-fn add_back(m: &mut Mesh, rng: &mut ChaCha8Rng, x_front: f64, seat: f64, width: f64, h: f64) {
+pub(super) fn add_back(
+    m: &mut Mesh,
+    rng: &mut ChaCha8Rng,
+    x_front: f64,
+    seat: f64,
+    width: f64,
+    h: f64,
+) {
     let tilt = u(rng, 0.0, 18.0);
     let thick = u(rng, 0.02, 0.06);
     let split = if h >= 0.70 {
@@ -405,7 +446,7 @@ fn add_back(m: &mut Mesh, rng: &mut ChaCha8Rng, x_front: f64, seat: f64, width: 
 
 /// What a seat stands on.
 #[derive(Clone, Copy)]
-enum Base {
+pub(super) enum Base {
     Legs,
     Pedestal,
     Sled,
@@ -414,7 +455,7 @@ enum Base {
 
 /// Seat slab (top at `seat`, `depth` × `width`, round when `round`) on a base.
 #[allow(clippy::too_many_arguments)]
-fn add_seat(
+pub(super) fn add_seat(
     m: &mut Mesh,
     rng: &mut ChaCha8Rng,
     seat: f64,
@@ -532,7 +573,7 @@ fn add_seat(
     }
 }
 
-fn pick_base(rng: &mut ChaCha8Rng, weights: [f64; 4]) -> Base {
+pub(super) fn pick_base(rng: &mut ChaCha8Rng, weights: [f64; 4]) -> Base {
     let total: f64 = weights.iter().sum();
     let mut x = u(rng, 0.0, total);
     for (b, w) in [Base::Legs, Base::Pedestal, Base::Sled, Base::Solid]
@@ -548,7 +589,7 @@ fn pick_base(rng: &mut ChaCha8Rng, weights: [f64; 4]) -> Base {
 }
 
 /// A chair with a back, optionally with arms; `back_h` above the seat.
-fn build_chair(rng: &mut ChaCha8Rng, back_h: f64, arms: bool) -> (Mesh, f64, Labels) {
+pub(super) fn build_chair(rng: &mut ChaCha8Rng, back_h: f64, arms: bool) -> (Mesh, f64, Labels) {
     let seat = u(rng, 0.42, 0.50);
     let depth = u(rng, 0.38, 0.50);
     let width = u(rng, 0.40, 0.52);
@@ -885,6 +926,14 @@ pub fn make_object(class: Class, rng: &mut ChaCha8Rng) -> Object {
             );
             (m, h * 0.6, Labels::default(), None)
         }
+        Class::WoodenArmchair => super::wide::wooden_armchair_object(rng),
+        Class::Wingback => super::wide::wingback_object(rng),
+        Class::TubChair => super::wide::tub_chair_object(rng),
+        Class::Toilet => super::wide::toilet_object(rng),
+        Class::NightStand => super::wide::night_stand_object(rng),
+        Class::BunkBed => super::wide::bunk_bed_object(rng),
+        Class::TableWithChairs => super::wide::table_with_chairs_object(rng),
+        Class::BenchUnderShelf => super::wide::bench_under_shelf_object(rng),
         Class::LowTable => {
             let h = u(rng, 0.30, 0.50);
             let m = if chance(rng, 0.3) {
@@ -948,7 +997,7 @@ pub fn recliner_labels(p: &ReclinerParams) -> Labels {
 }
 
 /// Marks the seat tops as a lying surface (long, wide benches and sofas).
-fn relabel_lying(m: &mut Mesh) {
+pub(super) fn relabel_lying(m: &mut Mesh) {
     for p in &mut m.parts {
         if *p == Part::Seat {
             *p = Part::LyingSurface;
@@ -977,8 +1026,12 @@ pub enum SceneKind {
     View,
     /// One depth view of the object with its back against a wall.
     Wall,
-    /// One depth view of 2–4 objects in a 4 × 4 m room with walls.
+    /// One depth view of 2–4 objects in a 4 × 4 m room with walls (`--mix wide`: 2–5
+    /// objects in a 3.6–5.6 m room with a ceiling).
     Room,
+    /// A whole room reconstructed as a mesh and read as its vertices (ScanNet-like), with
+    /// or without a ceiling (`--mix wide` only).
+    Scan,
 }
 
 impl SceneKind {
@@ -989,6 +1042,7 @@ impl SceneKind {
             SceneKind::View => "view",
             SceneKind::Wall => "wall",
             SceneKind::Room => "room",
+            SceneKind::Scan => "scan",
         }
     }
 }
@@ -1012,6 +1066,47 @@ pub struct DatasetSpec {
     pub full_density: f64,
     /// Gaussian noise of `full` scenes along the surface normal, metres.
     pub full_noise: f64,
+    /// Which furniture, cameras and samplings to draw from.
+    pub mix: Mix,
+    /// The frame the clouds are written in.
+    pub frame: OutFrame,
+}
+
+/// Which world [`generate`] draws from (`afford synth --mix`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Mix {
+    /// The mix of the README tables and the regression set: the same seed and counts
+    /// write the same bytes as before the wide mix existed.
+    #[default]
+    Default,
+    /// What real scans have as well (issue 11, see [`super::wide`]): ceilings, overhangs
+    /// (chairs pushed under tables, shelves over benches, bunk beds), reconstructed-mesh
+    /// vertex clouds, subsampled views, cameras pitched 10–55° down, dressed beds, things
+    /// on seats and the new furniture classes. Every room job alternates between a pitched
+    /// view (`room`) and a reconstruction (`scan`).
+    Wide,
+}
+
+/// The frame [`generate`] writes clouds in (`afford synth --frame`, the `frame` column).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum OutFrame {
+    /// Metres, z up, floor at z = 0 (the detector's frame).
+    #[default]
+    World,
+    /// The frame of the scene's depth camera (x right, y down, z forward, metres; for
+    /// `full` and `scan` scenes a virtual camera placed as for a view): the floor is
+    /// tilted and anywhere, so `afford eval` needs `--camera --floor auto`.
+    Camera,
+}
+
+impl OutFrame {
+    /// The name written in the `frame` column.
+    pub fn name(self) -> &'static str {
+        match self {
+            OutFrame::World => "world",
+            OutFrame::Camera => "camera",
+        }
+    }
 }
 
 impl Default for DatasetSpec {
@@ -1027,6 +1122,8 @@ impl Default for DatasetSpec {
             pcd_every: 5,
             full_density: 2500.0,
             full_noise: 0.003,
+            mix: Mix::Default,
+            frame: OutFrame::World,
         }
     }
 }
@@ -1046,6 +1143,9 @@ pub struct LabelRow {
     pub doubtful: Option<String>,
     /// Points in the file.
     pub points: usize,
+    /// The frame the cloud is written in (`world`, `camera`), for sets written with
+    /// `--mix wide` or `--frame`; `None` (no column) for the default world-frame sets.
+    pub frame: Option<String>,
 }
 
 /// What [`generate`] and [`views_of_labelled_models`] wrote.
@@ -1058,7 +1158,7 @@ pub struct DatasetSummary {
 }
 
 /// splitmix64, to derive independent per-scene seeds.
-fn mix(mut z: u64) -> u64 {
+pub(super) fn mix(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
@@ -1066,14 +1166,14 @@ fn mix(mut z: u64) -> u64 {
 }
 
 /// A large floor rectangle centred at the origin.
-fn big_floor() -> Mesh {
+pub(super) fn big_floor() -> Mesh {
     let mut m = Mesh::new();
     m.add_horizontal_rect(-8.0, -8.0, 8.0, 8.0, 0.0, Part::Other);
     m
 }
 
 /// Bounding radius of a mesh's footprint about the z axis, metres.
-fn footprint_radius(m: &Mesh) -> f64 {
+pub(super) fn footprint_radius(m: &Mesh) -> f64 {
     m.vertices
         .iter()
         .map(|p| (p.x * p.x + p.y * p.y).sqrt())
@@ -1102,12 +1202,14 @@ fn camera_at(
 }
 
 /// One rendered or sampled scene.
-struct Scene {
-    points: Vec<Point3<f64>>,
-    parts: Vec<Part>,
-    labels: Labels,
-    class: String,
-    doubtful: Option<String>,
+pub(super) struct Scene {
+    pub(super) points: Vec<Point3<f64>>,
+    pub(super) parts: Vec<Part>,
+    pub(super) labels: Labels,
+    pub(super) class: String,
+    pub(super) doubtful: Option<String>,
+    /// The depth camera that saw the scene (`None` for sampled models and scans).
+    pub(super) camera: Option<Camera>,
 }
 
 /// Shortest flat surface labelled `lying`, metres: it must carry the 1.75 m adult from the
@@ -1139,7 +1241,7 @@ const MIN_VISIBLE_SEAT_M2: f64 = 0.05;
 /// Renders `scene` with `objects` given by triangle ranges; an object's labels count when
 /// at least [`MIN_VISIBLE_SEAT_M2`] of its (horizontal) seat or lying surface is seen, each
 /// point standing for the patch its pixel covers.
-fn render_with_visibility(
+pub(super) fn render_with_visibility(
     scene: &Mesh,
     ranges: &[(usize, usize, Labels, Option<String>)],
     cam: &Camera,
@@ -1176,7 +1278,50 @@ fn render_with_visibility(
     (cloud.points, parts, labels, doubtful)
 }
 
-fn one_scene(kind: SceneKind, class: Class, seed: u64, spec: &DatasetSpec) -> Scene {
+/// The scene of a `view` or `wall` scene: `obj` turned by `yaw` degrees on a large floor,
+/// with a wall 0–0.15 m behind it when `wall` (then a seat gets a backrest and a headrest
+/// by the wall rule, see [`wall_backs`]). Returns the mesh, how many of its first
+/// triangles are the object's, and the labels.
+pub(super) fn object_on_floor(
+    obj: &Object,
+    wall: bool,
+    yaw: f64,
+    rng: &mut ChaCha8Rng,
+) -> (Mesh, usize, Labels) {
+    let mut m = obj.mesh.clone();
+    let mut labels = obj.labels;
+    if wall {
+        let (lo, _) = m.bounds().unwrap_or((Point3::origin(), Point3::origin()));
+        let gap = u(rng, 0.0, 0.15);
+        m.append(&super::furniture::wall(
+            lo.x - gap - 0.05,
+            -2.5,
+            2.5,
+            2.5,
+            0.1,
+        ));
+        // A seat against a wall: the wall reaches far above the seat within 0.15 m of its
+        // back, so the head leaning back rests on it (headrest), and a backless seat gets
+        // it as its backrest (README, "Conventions").
+        if labels.sitting && wall_backs(obj.class) {
+            labels.backrest = true;
+            labels.headrest = true;
+        }
+    }
+    let n = m.len();
+    let mut scene = m.placed(0.0, 0.0, yaw);
+    scene.append(&big_floor());
+    (scene, n, labels)
+}
+
+/// Whether a wall close behind an object of `class` is its backrest and headrest (the
+/// wall rule of README "Conventions"): not for beds, whose head end stands at the wall;
+/// one sits on a bed's side edge, so the wall (like the headboard) is beside the body.
+pub(super) fn wall_backs(class: Class) -> bool {
+    !matches!(class, Class::Bed | Class::BunkBed)
+}
+
+pub(super) fn one_scene(kind: SceneKind, class: Class, seed: u64, spec: &DatasetSpec) -> Scene {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let obj = make_object(class, &mut rng);
     let yaw = u(&mut rng, -180.0, 180.0);
@@ -1206,33 +1351,12 @@ fn one_scene(kind: SceneKind, class: Class, seed: u64, spec: &DatasetSpec) -> Sc
                 labels: obj.labels,
                 class: class.name().into(),
                 doubtful: obj.doubtful,
+                camera: None,
             }
         }
         SceneKind::View | SceneKind::Wall => {
-            let mut m = obj.mesh.clone();
-            let mut labels = obj.labels;
             let wall = kind == SceneKind::Wall;
-            if wall {
-                let (lo, _) = m.bounds().unwrap_or((Point3::origin(), Point3::origin()));
-                let gap = u(&mut rng, 0.0, 0.15);
-                m.append(&super::furniture::wall(
-                    lo.x - gap - 0.05,
-                    -2.5,
-                    2.5,
-                    2.5,
-                    0.1,
-                ));
-                // A seat against a wall: the wall reaches far above the seat within
-                // 0.15 m of its back, so the head leaning back rests on it (headrest),
-                // and a backless seat gets it as its backrest (README, "Conventions").
-                if labels.sitting {
-                    labels.backrest = true;
-                    labels.headrest = true;
-                }
-            }
-            let n = m.len();
-            let mut scene = m.placed(0.0, 0.0, yaw);
-            scene.append(&big_floor());
+            let (scene, n, labels) = object_on_floor(&obj, wall, yaw, &mut rng);
             let r = footprint_radius(&obj.mesh);
             let az = (yaw + rel_az(&mut rng, wall)).to_radians();
             let dist = u(&mut rng, 1.5, 3.0) + (r - 0.5).max(0.0) * 0.8;
@@ -1249,9 +1373,10 @@ fn one_scene(kind: SceneKind, class: Class, seed: u64, spec: &DatasetSpec) -> Sc
                 labels,
                 class: class.name().into(),
                 doubtful,
+                camera: Some(cam),
             }
         }
-        SceneKind::Room => {
+        SceneKind::Room | SceneKind::Scan => {
             let mut scene = Mesh::new();
             let mut ranges = Vec::new();
             let mut placed: Vec<(f64, f64, f64, f64)> = Vec::new(); // x, y, r, focus
@@ -1324,12 +1449,13 @@ fn one_scene(kind: SceneKind, class: Class, seed: u64, spec: &DatasetSpec) -> Sc
                 labels,
                 class: names.join("+"),
                 doubtful,
+                camera: Some(cam),
             }
         }
     }
 }
 
-fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SynthError + '_ {
+pub(super) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SynthError + '_ {
     move |source| SynthError::Io {
         path: path.to_path_buf(),
         source,
@@ -1337,50 +1463,60 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SynthError + '_ {
 }
 
 /// Writes a labels file with the DESIGN.md columns plus `kind,class,doubtful,points` and
-/// the fine-grained lying columns (see the module documentation).
+/// the fine-grained lying columns (see the module documentation), then a `frame` column
+/// (`world` or `camera`) when any row names its frame.
 pub fn write_labels(path: &Path, rows: &[LabelRow]) -> Result<(), SynthError> {
     let lerr = |e: csv::Error| SynthError::Labels {
         path: path.to_path_buf(),
         what: e.to_string(),
     };
     let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record([
-        "file",
-        "sitting",
-        "backrest",
-        "armrest",
-        "headrest",
-        "lying",
-        "kind",
-        "class",
-        "doubtful",
-        "points",
-        "elongated_body",
-        "raised_body",
-        "stretched_legs",
-        "raised_legs",
-    ])
+    let with_frame = rows.iter().any(|r| r.frame.is_some());
+    w.write_record(
+        [
+            "file",
+            "sitting",
+            "backrest",
+            "armrest",
+            "headrest",
+            "lying",
+            "kind",
+            "class",
+            "doubtful",
+            "points",
+            "elongated_body",
+            "raised_body",
+            "stretched_legs",
+            "raised_legs",
+        ]
+        .into_iter()
+        .chain(with_frame.then_some("frame")),
+    )
     .map_err(lerr)?;
     let b = |x: bool| if x { "1" } else { "0" };
     for r in rows {
         let l = r.labels;
         let [eb, rb, sl, rl] = l.posture_cells();
-        w.write_record([
-            r.file.as_str(),
-            b(l.sitting),
-            b(l.backrest),
-            b(l.armrest),
-            b(l.headrest),
-            b(l.lying),
-            &r.kind,
-            &r.class,
-            r.doubtful.as_deref().unwrap_or(""),
-            &r.points.to_string(),
-            eb,
-            rb,
-            sl,
-            rl,
-        ])
+        w.write_record(
+            [
+                r.file.as_str(),
+                b(l.sitting),
+                b(l.backrest),
+                b(l.armrest),
+                b(l.headrest),
+                b(l.lying),
+                &r.kind,
+                &r.class,
+                r.doubtful.as_deref().unwrap_or(""),
+                &r.points.to_string(),
+                eb,
+                rb,
+                sl,
+                rl,
+            ]
+            .into_iter()
+            .chain(with_frame.then(|| r.frame.as_deref().unwrap_or("world"))),
+        )
         .map_err(lerr)?;
     }
     let bytes = w.into_inner().map_err(|e| SynthError::Labels {
@@ -1401,7 +1537,11 @@ pub fn generate(
     spec: &DatasetSpec,
 ) -> Result<DatasetSummary, SynthError> {
     std::fs::create_dir_all(out_dir).map_err(io_err(out_dir))?;
-    let mut pool: Vec<Class> = CLASSES
+    let classes: &[Class] = match spec.mix {
+        Mix::Default => &CLASSES,
+        Mix::Wide => &super::wide::WIDE_CLASSES,
+    };
+    let mut pool: Vec<Class> = classes
         .iter()
         .flat_map(|&c| std::iter::repeat_n(c, c.weight()))
         .collect();
@@ -1420,6 +1560,12 @@ pub fn generate(
     ] {
         let offset = rng.random_range(0..pool.len());
         for k in 0..n {
+            // The wide mix alternates room views and reconstructed rooms.
+            let kind = if spec.mix == Mix::Wide && kind == SceneKind::Room && k % 2 == 1 {
+                SceneKind::Scan
+            } else {
+                kind
+            };
             jobs.push((kind, pool[(offset + k) % pool.len()]));
         }
     }
@@ -1427,12 +1573,14 @@ pub fn generate(
         .par_iter()
         .enumerate()
         .map(|(i, &(kind, class))| {
-            let s = one_scene(
-                kind,
-                class,
-                mix(seed.wrapping_mul(1_000_003) ^ i as u64),
-                spec,
-            );
+            let scene_seed = mix(seed.wrapping_mul(1_000_003) ^ i as u64);
+            let mut s = match spec.mix {
+                Mix::Default => one_scene(kind, class, scene_seed, spec),
+                Mix::Wide => super::wide::one_scene_wide(kind, class, scene_seed, spec),
+            };
+            if spec.frame == OutFrame::Camera {
+                super::wide::to_camera_frame(&mut s, mix(scene_seed ^ 5));
+            }
             let pcd = spec.pcd_every > 0 && i % spec.pcd_every == spec.pcd_every - 1;
             let ext = if pcd { "pcd" } else { "ply" };
             let name = format!("{i:04}_{}_{}.{ext}", kind.name(), class.name());
@@ -1450,6 +1598,8 @@ pub fn generate(
                 class: s.class,
                 doubtful: s.doubtful,
                 points: s.points.len(),
+                frame: (spec.mix != Mix::Default || spec.frame != OutFrame::World)
+                    .then(|| spec.frame.name().to_string()),
             })
         })
         .collect();
@@ -1570,6 +1720,7 @@ pub fn read_labels(path: &Path) -> Result<Vec<LabelRow>, SynthError> {
             points: text("points")
                 .parse()
                 .map_err(|_| lerr(format!("bad 'points' cell for {}", text("file"))))?,
+            frame: get("frame").map(String::from),
         });
     }
     Ok(rows)
@@ -1617,6 +1768,7 @@ pub fn views_of_labelled_models(
                 class: get("class").to_string(),
                 doubtful: Some(get("doubtful").to_string()).filter(|s| !s.is_empty()),
                 points,
+                frame: None,
             });
         }
     }
@@ -1918,6 +2070,7 @@ mod tests {
             class: "bed+sofa".into(),
             doubtful: None,
             points: 7,
+            frame: None,
         };
         let rows = vec![
             row(
@@ -2019,5 +2172,62 @@ mod tests {
         assert_eq!(read_labels(&a.labels_csv).unwrap(), a.rows);
         assert_eq!(text.lines().count(), 7);
         assert_eq!(text, std::fs::read_to_string(&b.labels_csv).unwrap());
+    }
+    #[test]
+    fn wide_sets_name_their_frame_and_differ_from_the_default() {
+        let spec = DatasetSpec {
+            full: 1,
+            view: 1,
+            wall: 0,
+            room: 2,
+            stride: 16,
+            pcd_every: 0,
+            mix: Mix::Wide,
+            ..DatasetSpec::default()
+        };
+        let d = tempfile::tempdir().unwrap();
+        let a = generate(d.path(), 4, &spec).unwrap();
+        let kinds: Vec<&str> = a.rows.iter().map(|r| r.kind.as_str()).collect();
+        assert_eq!(kinds, ["full", "view", "room", "scan"]);
+        assert!(a.rows.iter().all(|r| r.frame.as_deref() == Some("world")));
+        let text = std::fs::read_to_string(&a.labels_csv).unwrap();
+        assert!(text.lines().next().unwrap().ends_with(",raised_legs,frame"));
+        assert_eq!(read_labels(&a.labels_csv).unwrap(), a.rows);
+        let cam = DatasetSpec {
+            frame: OutFrame::Camera,
+            ..spec.clone()
+        };
+        let c = generate(&d.path().join("cam"), 4, &cam).unwrap();
+        assert!(c.rows.iter().all(|r| r.frame.as_deref() == Some("camera")));
+        // The same scenes, other coordinates.
+        for (x, y) in a.rows.iter().zip(&c.rows) {
+            assert_eq!((x.points, x.labels), (y.points, y.labels));
+            let pa = cloud::load(&d.path().join(&x.file)).unwrap().cloud;
+            let pc = cloud::load(&d.path().join("cam").join(&y.file))
+                .unwrap()
+                .cloud;
+            assert_ne!(pa.points, pc.points);
+        }
+        // A default set writes no frame column.
+        let def = generate(
+            &d.path().join("def"),
+            4,
+            &DatasetSpec {
+                mix: Mix::Default,
+                ..spec
+            },
+        )
+        .unwrap();
+        assert!(def.rows.iter().all(|r| r.frame.is_none()));
+    }
+
+    #[test]
+    fn a_bed_against_a_wall_gets_no_backrest() {
+        let spec = DatasetSpec::default();
+        for seed in 0..5 {
+            let s = one_scene(SceneKind::Wall, Class::Bed, seed, &spec);
+            assert!(!s.labels.backrest && !s.labels.headrest && !s.labels.armrest);
+        }
+        assert!(wall_backs(Class::Toilet) && !wall_backs(Class::BunkBed));
     }
 }

@@ -209,6 +209,40 @@ impl Mesh {
         self.push_triangle([i0, i2, i3], part);
     }
 
+    /// Adds a height field z = `f(x, y)` over `x0..x1` × `y0..y1` (metres) as a grid of
+    /// `nx` × `ny` cells (at least 1 each), two triangles per cell facing up, labelled
+    /// `part` (a duvet, a pillow top).
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_height_field(
+        &mut self,
+        x0: f64,
+        x1: f64,
+        y0: f64,
+        y1: f64,
+        nx: usize,
+        ny: usize,
+        f: impl Fn(f64, f64) -> f64,
+        part: Part,
+    ) {
+        let (nx, ny) = (nx.max(1), ny.max(1));
+        let base = self.vertices.len() as u32;
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let x = x0 + (x1 - x0) * i as f64 / nx as f64;
+                let y = y0 + (y1 - y0) * j as f64 / ny as f64;
+                self.push_vertex(Point3::new(x, y, f(x, y)));
+            }
+        }
+        let at = |i: usize, j: usize| base + (j * (nx + 1) + i) as u32;
+        for j in 0..ny {
+            for i in 0..nx {
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                self.push_triangle([a, b, c], part);
+                self.push_triangle([a, c, d], part);
+            }
+        }
+    }
+
     /// Appends all triangles of `other` (with their labels) to this mesh.
     pub fn append(&mut self, other: &Mesh) {
         let base = self.vertices.len() as u32;
@@ -341,6 +375,101 @@ pub fn sample_surface(
         }
     }
     (PointCloud::new(points), parts)
+}
+
+/// Reads `mesh` as a surface reconstruction would hand it over: the vertices of a mesh
+/// remeshed on a grid of `spacing` metres (like ScanNet's `_vh_clean_2.ply` read as
+/// points, about 4 cm apart on flat surfaces), not points spread over the area.
+///
+/// The surface is sampled densely ([`VERTEX_GRID_OVERSAMPLING`] points per grid cell
+/// face), the samples are binned into cubes of side `spacing` (the grid's origin shifted
+/// by a seeded offset), and each occupied cube gives one vertex at the mean of its
+/// samples, labelled with its most frequent [`Part`] (ties: the first in [`Part`] order);
+/// thin slabs thus merge into one layer and corners round off, as in a TSDF mesh. Then
+/// Gaussian noise of `noise_sigma_m` moves every vertex (all three axes). Vertices come in
+/// the order of their cubes; the result depends only on the inputs. A non-positive or
+/// non-finite `spacing` gives an empty cloud.
+pub fn sample_vertex_grid(
+    mesh: &Mesh,
+    spacing: f64,
+    noise_sigma_m: f64,
+    seed: u64,
+) -> (PointCloud, Vec<Part>) {
+    if !(spacing.is_finite() && spacing > 0.0) {
+        return (PointCloud::new(Vec::new()), Vec::new());
+    }
+    let density = VERTEX_GRID_OVERSAMPLING / (spacing * spacing);
+    let (dense, parts) = sample_surface(mesh, density, 0.0, seed);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x005E_ED0F_6A1D);
+    let offset = Vector3::new(
+        rng.random::<f64>(),
+        rng.random::<f64>(),
+        rng.random::<f64>(),
+    ) * spacing;
+    let key = |p: &Point3<f64>| {
+        let q = (p.coords + offset) / spacing;
+        (q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64)
+    };
+    let mut order: Vec<(i64, i64, i64, usize)> = dense
+        .points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let (a, b, c) = key(p);
+            (a, b, c, i)
+        })
+        .collect();
+    order.sort_unstable();
+    let sigma = if noise_sigma_m.is_finite() {
+        noise_sigma_m.abs()
+    } else {
+        0.0
+    };
+    let mut points = Vec::new();
+    let mut labels = Vec::new();
+    let mut start = 0;
+    while start < order.len() {
+        let k = (order[start].0, order[start].1, order[start].2);
+        let mut end = start;
+        let mut sum = Vector3::zeros();
+        let mut counts = [0usize; 6];
+        while end < order.len() && (order[end].0, order[end].1, order[end].2) == k {
+            let i = order[end].3;
+            sum += dense.points[i].coords;
+            counts[part_index(parts[i])] += 1;
+            end += 1;
+        }
+        let mean = sum / (end - start) as f64;
+        let best = (0..6).max_by_key(|&c| (counts[c], 6 - c)).unwrap_or(0);
+        let jitter = if sigma > 0.0 {
+            Vector3::new(gaussian(&mut rng), gaussian(&mut rng), gaussian(&mut rng)) * sigma
+        } else {
+            Vector3::zeros()
+        };
+        points.push(Point3::from(mean + jitter));
+        labels.push(PART_ORDER[best]);
+        start = end;
+    }
+    (PointCloud::new(points), labels)
+}
+
+/// Dense samples per grid-cell face area that [`sample_vertex_grid`] draws before binning:
+/// enough that every cube a surface crosses gets samples (a cube cut by a plane at a
+/// corner holds little of it), few enough to stay fast on a whole room.
+pub const VERTEX_GRID_OVERSAMPLING: f64 = 6.0;
+
+/// [`Part`]s in a fixed order (ties of [`sample_vertex_grid`]).
+const PART_ORDER: [Part; 6] = [
+    Part::Seat,
+    Part::Backrest,
+    Part::Armrest,
+    Part::Headrest,
+    Part::LyingSurface,
+    Part::Other,
+];
+
+fn part_index(p: Part) -> usize {
+    PART_ORDER.iter().position(|&q| q == p).unwrap_or(5)
 }
 
 #[cfg(test)]
@@ -623,5 +752,56 @@ mod tests {
         assert!(sample_surface(&m, 0.0, 0.0, 1).0.is_empty());
         assert!(sample_surface(&m, f64::NAN, 0.0, 1).0.is_empty());
         assert!(sample_surface(&Mesh::new(), 1000.0, 0.01, 1).0.is_empty());
+    }
+    #[test]
+    fn vertex_grid_spacing_is_the_grid_not_the_area() {
+        let mut m = Mesh::new();
+        m.add_horizontal_rect(0.0, 0.0, 1.0, 1.0, 0.0, Part::Seat);
+        let s = 0.04;
+        let (c, parts) = sample_vertex_grid(&m, s, 0.0, 3);
+        let n = c.points.len();
+        // 25 x 25 cells, plus a partial row and column at the shifted grid's edges.
+        assert!((625..=676).contains(&n), "{n}");
+        assert!(parts.iter().all(|&p| p == Part::Seat));
+        let nn: Vec<f64> = c
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                c.points
+                    .iter()
+                    .enumerate()
+                    .filter(|&(j, _)| j != i)
+                    .map(|(_, q)| (p - q).norm())
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect();
+        let mut sorted = nn.clone();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted[n / 2];
+        // Cell centres ~s apart, each mean moved a few mm by the samples it holds.
+        assert!((0.75 * s..=1.1 * s).contains(&median), "{median}");
+        // Area sampling at the same count puts many points much closer together.
+        let close = nn.iter().filter(|&&d| d < s / 2.0).count();
+        let (a, _) = sample_surface(&m, n as f64, 0.0, 3);
+        let close_area = a
+            .points
+            .iter()
+            .enumerate()
+            .filter(|(i, p)| {
+                a.points
+                    .iter()
+                    .enumerate()
+                    .any(|(j, q)| j != *i && (*p - q).norm() < s / 2.0)
+            })
+            .count();
+        assert!(
+            close * 10 < n && close_area * 4 > a.points.len(),
+            "{close} {close_area}"
+        );
+        // Every point lies on the surface; the same seed gives the same cloud.
+        assert!(c.points.iter().all(|p| p.z.abs() < 1e-12));
+        assert_eq!(sample_vertex_grid(&m, s, 0.0, 3).0.points, c.points);
+        assert!(sample_vertex_grid(&m, 0.0, 0.0, 3).0.points.is_empty());
     }
 }

@@ -3,8 +3,9 @@
 //! [`mesh`] holds labelled triangle meshes (boxes, cylinders) and a deterministic surface
 //! sampler that turns them into point clouds; [`furniture`] builds parametric chairs,
 //! stools, sofas, benches, beds (positives) and tables, desks, shelves, cabinets, walls,
-//! floors (negatives) from them. World frame: metres, z up, floor at z = 0; seating
-//! furniture faces +x (the backrest is on the -x side).
+//! floors (negatives) from them; [`wide`] adds what real scans have (`--mix wide`).
+//! World frame: metres, z up, floor at z = 0; seating furniture faces +x (the backrest is
+//! on the -x side).
 
 pub mod camera;
 pub mod dataset;
@@ -12,6 +13,7 @@ pub mod furniture;
 pub mod mesh;
 pub mod meshio;
 pub mod scenes;
+pub mod wide;
 
 pub use furniture::*;
 pub use mesh::{sample_surface, Mesh, Part};
