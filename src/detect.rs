@@ -33,7 +33,7 @@ impl Default for DetectConfig {
         DetectConfig {
             heightmap: HeightMapConfig::default(),
             scene: SceneConfig {
-                // Issue 2: at most 0.02 m; finer than the 3-4 cm radius of the thinnest limb.
+                // At most 0.02 m: finer than the 3-4 cm radius of the thinnest limb.
                 voxel_size: 0.02,
                 // Paper, section 3.1: agent and scene share the ground plane z = 0.
                 floor: true,

@@ -1,6 +1,6 @@
 //! Labelled synthetic datasets: varied furniture, rendered as full models or depth views,
 //! written as PLY (binary, with a per-point `part` property) or PCD files plus a
-//! `labels.csv` in the format of DESIGN.md ("Interfaces others depend on"):
+//! `labels.csv` in the format of README ("Outputs"):
 //! `file,sitting,backrest,armrest,headrest,lying,kind,class,doubtful,points`, then the
 //! fine-grained lying columns `elongated_body,raised_body,stretched_legs,raised_legs`
 //! appended at the end so that readers of the older columns are unaffected.
@@ -1462,7 +1462,7 @@ pub(super) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SynthError +
     }
 }
 
-/// Writes a labels file with the DESIGN.md columns plus `kind,class,doubtful,points` and
+/// Writes a labels file with the README ("Outputs") columns plus `kind,class,doubtful,points` and
 /// the fine-grained lying columns (see the module documentation), then a `frame` column
 /// (`world` or `camera`) when any row names its frame.
 pub fn write_labels(path: &Path, rows: &[LabelRow]) -> Result<(), SynthError> {
