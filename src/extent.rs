@@ -264,8 +264,9 @@ mod tests {
 
     #[test]
     fn grid_bytes_match_the_grids_built() {
-        // 1 m x 1 m x 0 m: height map 21 x 21 cells, field (50 + 2 + 30)^2 x (0 + 2 + 30).
+        // 1 m x 1 m x 0 m: height map 21 x 21 cells (16 bytes of height and two 8-byte
+        // column offsets each), field (50 + 2 + 30)^2 x (0 + 2 + 30).
         let b = grid_bytes([1.0, 1.0, 0.0], &DetectConfig::default());
-        assert_eq!(b, 21.0 * 21.0 * 16.0 + 82.0 * 82.0 * 32.0 * 8.0);
+        assert_eq!(b, 21.0 * 21.0 * 32.0 + 82.0 * 82.0 * 32.0 * 8.0);
     }
 }

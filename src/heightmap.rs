@@ -358,8 +358,13 @@ mod tests {
         assert_eq!(stack_top(&[], &c), None);
         // A leg stretcher under a seat.
         assert_eq!(stack_top(&[0.0, 0.2, 0.45], &c), Some(0.45));
-        // A back rising from a seat in small steps.
-        assert_eq!(stack_top(&[0.0, 0.45, 0.6, 0.75, 0.9], &c), Some(0.9));
+        // A back rising from a seat in steps under a thigh's thickness; a gap of 0.15 m
+        // over the seat ends the stack.
+        assert_eq!(
+            stack_top(&[0.0, 0.45, 0.55, 0.65, 0.75, 0.85, 0.95], &c),
+            Some(0.95)
+        );
+        assert_eq!(stack_top(&[0.0, 0.45, 0.62, 0.75], &c), Some(0.45));
         // A table top 0.25 m over a seat; a shelf 0.75 m over the floor.
         assert_eq!(stack_top(&[0.0, 0.45, 0.7, 0.72], &c), Some(0.45));
         assert_eq!(stack_top(&[0.0, 0.75], &c), Some(0.75));
