@@ -8,7 +8,6 @@
 //! its `Display`). [`check_units`] warns about clouds that look like millimetres or
 //! centimetres; [`parse_matrix`] reads the 4x4 transform from text.
 
-use std::collections::HashMap;
 use std::fmt;
 use std::str::FromStr;
 
@@ -16,7 +15,7 @@ use nalgebra::{Matrix3, Matrix4, Point3, Rotation3, UnitQuaternion, Vector3};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::PointCloud;
+use super::{spacing, PointCloud};
 
 /// Largest angle (degrees) between a floor candidate's normal and the assumed up (+z after
 /// the up rotation), for scans whose up axis is known: a levelled scanner or a model.
@@ -596,30 +595,20 @@ fn find_floor(
 /// (millimetres: bounding-box diagonal over 100 units with points at least 1 unit apart;
 /// centimetres: over 20 units with points at least 0.2 apart), or `None`.
 ///
-/// The extent is that of the central 98 % of up to [`UNITS_SAMPLE`] evenly chosen points
-/// along each axis, so that a stray point does not make a room look like millimetres; the
-/// spacing is measured at up to 200 points. Memory does not grow with the cloud beyond
-/// the points near those 200.
+/// The extent is the robust one of [`spacing::robust_extent`] (the central 98 % of an
+/// even sample along each axis), so that a stray point does not make a room look like
+/// millimetres; the spacing is the nearest-neighbour distance at up to [`UNITS_QUERIES`]
+/// points ([`spacing::neighbour_distance`]), whose memory follows those points.
 pub fn check_units(cloud: &PointCloud) -> Option<String> {
-    let finite = |p: &&Point3<f64>| p.coords.iter().all(|c| c.is_finite());
-    let n = cloud.points.iter().filter(finite).count();
-    if n < 10 {
+    let extent = spacing::robust_extent(cloud)?;
+    if extent.n < 10 {
         return None;
     }
-    let step = n.div_ceil(UNITS_SAMPLE);
-    let sample: Vec<&Point3<f64>> = cloud.points.iter().filter(finite).step_by(step).collect();
-    let trim = sample.len() / 100;
-    let mut span = Vector3::zeros();
-    for a in 0..3 {
-        let mut v: Vec<f64> = sample.iter().map(|p| p[a]).collect();
-        v.sort_by(f64::total_cmp);
-        span[a] = v[v.len() - 1 - trim] - v[trim];
-    }
-    let diag = span.norm();
+    let diag = (extent.hi - extent.lo).norm();
     if !diag.is_finite() {
         return None;
     }
-    let spacing = typical_spacing(cloud, n, diag)?;
+    let spacing = spacing::neighbour_distance(cloud, &extent, 1, UNITS_QUERIES)?;
     if diag > 100.0 && spacing >= 1.0 {
         Some(format!(
             "the cloud is {diag:.0} units across with points about {spacing:.2} apart: it \
@@ -639,106 +628,8 @@ pub fn check_units(cloud: &PointCloud) -> Option<String> {
     }
 }
 
-/// Most points whose coordinates [`check_units`] sorts to measure the extent: enough
-/// for the 1 % and 99 % quantiles to be within a few per cent of the cloud's.
-const UNITS_SAMPLE: usize = 10_000;
-/// Most points of one grid cell a spacing query looks at (the scan stops after 5000).
-const SPACING_SCAN: usize = 5001;
-
-/// A cell of the spacing grid.
-type Cell = (i64, i64, i64);
-
-/// Median nearest-neighbour distance of up to 200 evenly chosen of the `n` finite points
-/// (a hash grid whose cells hold a few points on a surface, filled only around the
-/// chosen points).
-fn typical_spacing(cloud: &PointCloud, n: usize, diag: f64) -> Option<f64> {
-    if n < 2 {
-        return None;
-    }
-    let cell = (2.0 * diag / (n as f64).sqrt()).max(diag * 1e-9);
-    if cell <= 0.0 {
-        return None;
-    }
-    let key = |p: &Point3<f64>| {
-        (
-            (p.x / cell).floor() as i64,
-            (p.y / cell).floor() as i64,
-            (p.z / cell).floor() as i64,
-        )
-    };
-    let pts = || {
-        cloud
-            .points
-            .iter()
-            .filter(|p| p.coords.iter().all(|c| c.is_finite()))
-    };
-    let step = n.div_ceil(200);
-    let queries: Vec<(usize, Point3<f64>)> = pts()
-        .enumerate()
-        .step_by(step)
-        .map(|(i, p)| (i, *p))
-        .collect();
-    let mut grid: HashMap<Cell, Vec<(usize, Point3<f64>)>> = HashMap::new();
-    for (_, q) in &queries {
-        let (kx, ky, kz) = key(q);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    grid.entry((
-                        kx.saturating_add(dx),
-                        ky.saturating_add(dy),
-                        kz.saturating_add(dz),
-                    ))
-                    .or_default();
-                }
-            }
-        }
-    }
-    for (i, p) in pts().enumerate() {
-        if let Some(list) = grid.get_mut(&key(p)) {
-            if list.len() < SPACING_SCAN {
-                list.push((i, *p));
-            }
-        }
-    }
-    let mut dists: Vec<f64> = Vec::new();
-    for (qi, q) in &queries {
-        let (kx, ky, kz) = key(q);
-        let mut best = f64::INFINITY;
-        let mut scanned = 0usize;
-        'cells: for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let k = (
-                        kx.saturating_add(dx),
-                        ky.saturating_add(dy),
-                        kz.saturating_add(dz),
-                    );
-                    let Some(list) = grid.get(&k) else {
-                        continue;
-                    };
-                    for (j, p) in list {
-                        if j == qi {
-                            continue;
-                        }
-                        let d = (p - q).norm();
-                        if d < best {
-                            best = d;
-                        }
-                        scanned += 1;
-                        if scanned > 5000 {
-                            break 'cells;
-                        }
-                    }
-                }
-            }
-        }
-        // No neighbour in the 27 cells: at least a cell apart.
-        dists.push(if best.is_finite() { best } else { cell });
-    }
-    dists.sort_by(f64::total_cmp);
-    dists.get(dists.len() / 2).copied()
-}
+/// Points whose nearest-neighbour distance [`check_units`] measures.
+const UNITS_QUERIES: usize = 200;
 
 /// Parses a 4x4 matrix from 16 numbers, row-major, separated by whitespace, commas or
 /// semicolons (brackets are ignored, `#` starts a comment to the end of the line): the

@@ -12,34 +12,78 @@ use nalgebra::Point3;
 
 use super::PointCloud;
 
-/// Points whose neighbours are measured: evenly spread over the cloud's order.
+/// Points whose neighbours [`point_spacing`] measures: evenly spread over the cloud's order.
 const QUERIES: usize = 256;
 /// Which neighbour's distance is the spacing: the fourth, the edge neighbours of a grid.
 const K: usize = 4;
-/// Neighbour candidates scanned per query at most (a bound on time for piled-up points).
+/// Neighbour candidates scanned per query at most (a bound on time for piled-up points);
+/// a grid cell keeps no more than this many points (a bound on memory).
 const MAX_SCANNED: usize = 5000;
-/// Points (evenly chosen) whose coordinates give the robust extent.
-const EXTENT_SAMPLE: usize = 4096;
+/// Most points (evenly chosen) whose coordinates are sorted for the robust extent: enough
+/// for the 1 % and 99 % quantiles to be within a few per cent of the cloud's.
+const EXTENT_SAMPLE: usize = 10_000;
 /// Share of the sample left out at each end of every axis: stray points do not size the grid.
 const EXTENT_TRIM: f64 = 0.01;
 
-/// Median distance (in the cloud's units) from up to [`QUERIES`] points, chosen evenly by
-/// index, to their [`K`]-th nearest neighbour; `None` for fewer than two finite points.
-///
-/// The search grid is sized from the cloud's robust extent (1st to 99th percentile per
-/// axis, so stray points do not matter) and the point count (twice the spacing of the
-/// points spread evenly over the extent's diagonal square), so it is scale-free; only
-/// the grid cells around the query points are stored, so memory follows the queries, not
-/// the cloud. A neighbour not found in the query's 27 cells counts as one cell apart.
-pub fn point_spacing(cloud: &PointCloud) -> Option<f64> {
+/// The finite points of a cloud and their robust extent.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Extent {
+    /// Number of finite points.
+    pub n: usize,
+    /// Per axis, the [`EXTENT_TRIM`] quantile of up to [`EXTENT_SAMPLE`] evenly chosen
+    /// finite points.
+    pub lo: Point3<f64>,
+    /// Per axis, the 1 - [`EXTENT_TRIM`] quantile of the same points.
+    pub hi: Point3<f64>,
+}
+
+/// The robust extent of `cloud`; `None` without finite points.
+pub(crate) fn robust_extent(cloud: &PointCloud) -> Option<Extent> {
     let finite = |p: &&Point3<f64>| p.coords.iter().all(|c| c.is_finite());
     let n = cloud.points.iter().filter(finite).count();
-    if n < 2 {
+    if n == 0 {
         return None;
     }
-    let (lo, hi) = robust_extent(cloud, n)?;
-    let diag = (hi - lo).norm();
-    let cell = 2.0 * diag / (n as f64).sqrt();
+    let step = n.div_ceil(EXTENT_SAMPLE);
+    let sample: Vec<&Point3<f64>> = cloud.points.iter().filter(finite).step_by(step).collect();
+    let cut = (sample.len() as f64 * EXTENT_TRIM) as usize;
+    let mut lo = Point3::origin();
+    let mut hi = Point3::origin();
+    for axis in 0..3 {
+        let mut v: Vec<f64> = sample.iter().map(|p| p[axis]).collect();
+        v.sort_by(f64::total_cmp);
+        lo[axis] = v[cut];
+        hi[axis] = v[v.len() - 1 - cut];
+    }
+    Some(Extent { n, lo, hi })
+}
+
+/// Median distance (in the cloud's units) from up to [`QUERIES`] points, chosen evenly by
+/// index, to their [`K`]-th nearest neighbour; `None` for fewer than two finite points.
+pub fn point_spacing(cloud: &PointCloud) -> Option<f64> {
+    neighbour_distance(cloud, &robust_extent(cloud)?, K, QUERIES)
+}
+
+/// Lower median distance from up to `queries` finite points of `cloud` (of robust extent
+/// `extent`), chosen evenly by index, to their `k`-th nearest neighbour; `None` for fewer
+/// than two finite points.
+///
+/// The search grid is sized from the robust extent (so stray points do not matter) and
+/// the point count (twice the spacing of the points spread evenly over the extent's
+/// diagonal square), so it is scale-free; only the grid cells around the query points
+/// are stored, each with at most [`MAX_SCANNED`] points, so memory follows the queries,
+/// not the cloud. A neighbour not found in the query's 27 cells counts as one cell apart.
+pub(crate) fn neighbour_distance(
+    cloud: &PointCloud,
+    extent: &Extent,
+    k: usize,
+    queries: usize,
+) -> Option<f64> {
+    let Extent { n, lo, hi } = *extent;
+    if n < 2 || k == 0 {
+        return None;
+    }
+    let cell = 2.0 * (hi - lo).norm() / (n as f64).sqrt();
     if !(cell.is_finite() && cell > 0.0) {
         // Every point at one place.
         return Some(0.0);
@@ -55,54 +99,58 @@ pub fn point_spacing(cloud: &PointCloud) -> Option<f64> {
             .all(|v| v.is_finite() && v.abs() < 1e15)
             .then(|| k.map(|v| v.floor() as i64))
     };
-    let step = n.div_ceil(QUERIES);
+    let step = n.div_ceil(queries.max(1));
     let queries: Vec<(usize, Point3<f64>)> = cloud
         .points
         .iter()
         .enumerate()
-        .filter(|(_, p)| finite(p))
+        .filter(|(_, p)| p.coords.iter().all(|c| c.is_finite()))
         .step_by(step)
         .map(|(i, p)| (i, *p))
         .collect();
     let mut wanted: HashSet<[i64; 3]> = HashSet::new();
     for (_, q) in &queries {
-        let Some(k) = key(q) else { continue };
+        let Some(c) = key(q) else { continue };
         for d in neighbourhood() {
-            wanted.insert([k[0] + d[0], k[1] + d[1], k[2] + d[2]]);
+            wanted.insert([c[0] + d[0], c[1] + d[1], c[2] + d[2]]);
         }
     }
     let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
     for (i, p) in cloud.points.iter().enumerate() {
-        if let Some(k) = key(p).filter(|k| wanted.contains(k)) {
-            grid.entry(k).or_default().push(i);
+        if let Some(c) = key(p).filter(|c| wanted.contains(c)) {
+            let list = grid.entry(c).or_default();
+            if list.len() <= MAX_SCANNED {
+                list.push(i);
+            }
         }
     }
+    // The k smallest distances of a query so far, ascending.
+    let mut best = vec![f64::INFINITY; k];
     let mut dists: Vec<f64> = queries
         .iter()
         .map(|(qi, q)| {
-            let Some(k) = key(q) else { return cell };
-            // The K smallest distances so far, ascending.
-            let mut best = [f64::INFINITY; K];
+            let Some(c) = key(q) else { return cell };
+            best.fill(f64::INFINITY);
             let mut scanned = 0usize;
-            for d in neighbourhood() {
-                let Some(list) = grid.get(&[k[0] + d[0], k[1] + d[1], k[2] + d[2]]) else {
+            'cells: for d in neighbourhood() {
+                let Some(list) = grid.get(&[c[0] + d[0], c[1] + d[1], c[2] + d[2]]) else {
                     continue;
                 };
                 for &j in list {
                     if j != *qi {
                         let d = (cloud.points[j] - q).norm();
-                        if d < best[K - 1] {
-                            best[K - 1] = d;
+                        if d < best[k - 1] {
+                            best[k - 1] = d;
                             best.sort_by(f64::total_cmp);
                         }
                     }
                     scanned += 1;
                     if scanned > MAX_SCANNED {
-                        return best[K - 1].min(cell);
+                        break 'cells;
                     }
                 }
             }
-            best[K - 1].min(cell)
+            best[k - 1].min(cell)
         })
         .collect();
     dists.sort_by(f64::total_cmp);
@@ -111,28 +159,6 @@ pub fn point_spacing(cloud: &PointCloud) -> Option<f64> {
 
 fn neighbourhood() -> impl Iterator<Item = [i64; 3]> {
     (-1..=1).flat_map(|x| (-1..=1).flat_map(move |y| (-1..=1).map(move |z| [x, y, z])))
-}
-
-/// Per-axis [`EXTENT_TRIM`] and 1 - [`EXTENT_TRIM`] quantiles of up to [`EXTENT_SAMPLE`]
-/// evenly chosen finite points (`n` of them in all).
-fn robust_extent(cloud: &PointCloud, n: usize) -> Option<(Point3<f64>, Point3<f64>)> {
-    let step = n.div_ceil(EXTENT_SAMPLE);
-    let sample: Vec<&Point3<f64>> = cloud
-        .points
-        .iter()
-        .filter(|p| p.coords.iter().all(|c| c.is_finite()))
-        .step_by(step)
-        .collect();
-    let mut lo = Point3::origin();
-    let mut hi = Point3::origin();
-    for axis in 0..3 {
-        let mut v: Vec<f64> = sample.iter().map(|p| p[axis]).collect();
-        v.sort_by(f64::total_cmp);
-        let cut = (v.len() as f64 * EXTENT_TRIM) as usize;
-        lo[axis] = *v.get(cut)?;
-        hi[axis] = *v.get(v.len() - 1 - cut)?;
-    }
-    Some((lo, hi))
 }
 
 #[cfg(test)]
