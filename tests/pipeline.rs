@@ -201,7 +201,7 @@ fn output_does_not_depend_on_the_thread_count() {
 }
 
 /// A wooden armchair whose arm rails rest on the front legs carried up as posts and run
-/// back to the back posts right over the seat's side edges (PITFALLS and issue 11: 12 of
+/// back to the back posts right over the seat's side edges (issue 11: 12 of
 /// 16 such chairs got no sitting: the rails flank the seat, the gradient heading is off by
 /// 90 degrees, and the raised arms of the initial pose meet a rail at every heading).
 fn wooden_armchair() -> Mesh {
