@@ -3,7 +3,7 @@
 
 use nalgebra::{Matrix3, Point3, Vector3};
 
-use crate::fuzzy::rule;
+use crate::fuzzy::{rule, Trapezoid};
 use crate::heightmap::HeightMap;
 use crate::hierarchy::{HypothesisRule, Orientation};
 
@@ -43,26 +43,14 @@ pub fn hypotheses(
     let mut out = Vec::new();
     for iy in (0..map.ny).step_by(step) {
         for ix in (0..map.nx).step_by(step) {
-            if map.get(ix as isize, iy as isize).is_none() {
+            let Some(Rating {
+                mean,
+                top,
+                memberships,
+            }) = rate(map, ix, iy, &template, height.as_ref(), rule_)
+            else {
                 continue;
-            }
-            let (mut n, mut sum, mut sum2, mut top) = (0usize, 0.0, 0.0, f64::MIN);
-            for &(dx, dy) in &template {
-                if let Some(h) = map.get(ix as isize + dx, iy as isize + dy) {
-                    n += 1;
-                    sum += h;
-                    sum2 += h * h;
-                    top = top.max(h);
-                }
-            }
-            let discontinuity = 1.0 - n as f64 / template.len() as f64;
-            let mean = sum / n as f64;
-            let roughness = (sum2 / n as f64 - mean * mean).max(0.0).sqrt();
-            let memberships = [
-                rule_.discontinuity.membership(discontinuity),
-                rule_.roughness.membership(roughness),
-                height.map_or(1.0, |t| t.membership(mean)),
-            ];
+            };
             let verdict =
                 rule_
                     .available
@@ -89,6 +77,52 @@ pub fn hypotheses(
         }
     }
     out
+}
+
+/// What the fuzzy rule of section 4.1 sees at one cell: the template's statistics and the
+/// three memberships.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rating {
+    /// Mean height of the valid cells under the template, metres.
+    pub mean: f64,
+    /// Highest height under the template, metres.
+    pub top: f64,
+    /// Discontinuity low, roughness low, height comfortable.
+    pub memberships: [f64; 3],
+}
+
+/// Rates cell `(ix, iy)` of `map` with the torso `template` (cell offsets) and the
+/// `height` set already in metres; `None` if the cell is invalid.
+pub fn rate(
+    map: &HeightMap,
+    ix: usize,
+    iy: usize,
+    template: &[(isize, isize)],
+    height: Option<&Trapezoid>,
+    rule_: &HypothesisRule,
+) -> Option<Rating> {
+    map.get(ix as isize, iy as isize)?;
+    let (mut n, mut sum, mut sum2, mut top) = (0usize, 0.0, 0.0, f64::MIN);
+    for &(dx, dy) in template {
+        if let Some(h) = map.get(ix as isize + dx, iy as isize + dy) {
+            n += 1;
+            sum += h;
+            sum2 += h * h;
+            top = top.max(h);
+        }
+    }
+    let discontinuity = 1.0 - n as f64 / template.len() as f64;
+    let mean = sum / n as f64;
+    let roughness = (sum2 / n as f64 - mean * mean).max(0.0).sqrt();
+    Some(Rating {
+        mean,
+        top,
+        memberships: [
+            rule_.discontinuity.membership(discontinuity),
+            rule_.roughness.membership(roughness),
+            height.map_or(1.0, |t| t.membership(mean)),
+        ],
+    })
 }
 
 /// Direction (radians about z) of steepest descent of the least-squares plane through the

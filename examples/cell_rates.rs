@@ -1,0 +1,48 @@
+//! Writes, for every valid cell of a cloud's height map, what the hypothesis rule of
+//! section 4.1 sees there, as CSV on stdout (`x,y,height,mean,discontinuity,roughness,
+//! comfortable`), for looking at why a place gets no hypothesis:
+//! `cargo run --release --example cell_rates -- cloud.ply [sitting|lying] [height]`.
+//! The cloud must already be in the detector's frame (metres, z up, floor at z = 0).
+use afford::detect::DetectConfig;
+use afford::heightmap::HeightMap;
+use afford::hypotheses::rate;
+use afford::model_set::{load_agent, load_hierarchy, Source, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let Some(path) = args.get(1) else {
+        eprintln!("usage: cell_rates CLOUD [sitting|lying] [HEIGHT]");
+        std::process::exit(2);
+    };
+    let name = args.get(2).map_or("sitting", String::as_str);
+    let body: f64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1.75);
+    let cloud = match afford::cloud::load(std::path::Path::new(path)) {
+        Ok(c) => c.cloud,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(2);
+        }
+    };
+    let (an, at) = BUILTIN_AGENTS[0];
+    let agent = load_agent(&Source::Builtin(an, at), body).expect("built-in agent");
+    let Some(&(hn, ht)) = BUILTIN_HIERARCHIES.iter().find(|(n, _)| *n == name) else {
+        eprintln!("unknown hierarchy {name}");
+        std::process::exit(2);
+    };
+    let h = load_hierarchy(&Source::Builtin(hn, ht), &agent).expect("built-in hierarchy");
+    let map = HeightMap::from_cloud(&cloud, &DetectConfig::default().heightmap);
+    let rule = &h.hypothesis;
+    let template = map.disc(rule.template_diameter * body / 2.0);
+    let height = rule.height.map(|t| t.scaled(body));
+    println!("x,y,height,mean,discontinuity,roughness,comfortable");
+    for iy in 0..map.ny {
+        for ix in 0..map.nx {
+            if let Some(r) = rate(&map, ix, iy, &template, height.as_ref(), rule) {
+                let (x, y) = map.centre(ix, iy);
+                let z = map.get(ix as isize, iy as isize).unwrap_or(f64::NAN);
+                let [d, ro, c] = r.memberships;
+                println!("{x:.3},{y:.3},{z:.3},{:.3},{d:.3},{ro:.3},{c:.3}", r.mean);
+            }
+        }
+    }
+}
