@@ -2,7 +2,8 @@
 //! link and image in README.md, CHANGELOG.md and docs/*.md names a file of the
 //! repository (not outside it), every `#anchor` names a heading of its target page, and no
 //! page points to things a reader of the repository cannot open (issue numbers, notes
-//! kept elsewhere).
+//! kept elsewhere); docs/cli.md documents every flag of `afford <command> --help` and no
+//! other.
 
 use std::collections::HashSet;
 use std::path::{Component, Path, PathBuf};
@@ -175,7 +176,10 @@ fn every_relative_link_of_the_docs_resolves_inside_the_repository() {
         }
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
-    assert!(checked >= 50, "only {checked} links found: is the parser right?");
+    assert!(
+        checked >= 50,
+        "only {checked} links found: is the parser right?"
+    );
 }
 
 #[test]
@@ -221,7 +225,90 @@ fn the_anchor_rule_matches_github() {
     let a = anchors("# A\n## B c\n```\n# not a heading\n```\n## B c\n#!shebang\n");
     let want: HashSet<String> = ["a", "b-c", "b-c-1"].map(String::from).into();
     assert_eq!(a, want);
-    assert_eq!(link_targets("see [a](x.md#y) and ![p](../p.png)"), ["x.md#y", "../p.png"]);
-    assert_eq!(normalise(Path::new("docs/../README.md")), Some("README.md".into()));
+    assert_eq!(
+        link_targets("see [a](x.md#y) and ![p](../p.png)"),
+        ["x.md#y", "../p.png"]
+    );
+    assert_eq!(
+        normalise(Path::new("docs/../README.md")),
+        Some("README.md".into())
+    );
     assert_eq!(normalise(Path::new("../shared/x.md")), None);
+}
+
+/// The long flags `afford <command> --help` lists (`--help` itself left out).
+fn help_flags(command: &str) -> Vec<String> {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_afford"))
+        .args([command, "--help"])
+        .output()
+        .expect("afford runs");
+    assert!(out.status.success(), "afford {command} --help failed");
+    let text = String::from_utf8(out.stdout).expect("help is UTF-8");
+    let mut flags = Vec::new();
+    for line in text.lines() {
+        let line = line.trim_start();
+        let line = line
+            .strip_prefix('-')
+            .filter(|l| !l.starts_with('-'))
+            .map_or(line, |l| l.get(3..).unwrap_or(""));
+        if let Some(rest) = line.strip_prefix("--") {
+            let name: String = rest
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '-')
+                .collect();
+            if !name.is_empty() && name != "help" {
+                flags.push(format!("--{name}"));
+            }
+        }
+    }
+    flags
+}
+
+/// Whether `doc` names `flag` in code (`` `--scan`` but not `` `--scans``).
+fn mentions(doc: &str, flag: &str) -> bool {
+    let quoted = format!("`{flag}");
+    doc.match_indices(&quoted).any(|(at, _)| {
+        doc[at + quoted.len()..]
+            .chars()
+            .next()
+            .is_none_or(|c| !(c.is_ascii_alphanumeric() || c == '-'))
+    })
+}
+
+#[test]
+fn docs_cli_md_lists_every_flag_and_invents_none() {
+    let doc = std::fs::read_to_string(root().join("docs/cli.md")).expect("docs/cli.md");
+    let commands = ["detect", "inspect", "synth", "eval", "convert"];
+    let mut problems = Vec::new();
+    let mut all = HashSet::new();
+    for command in commands {
+        let flags = help_flags(command);
+        assert!(
+            flags.len() >= 2,
+            "no flags parsed from `afford {command} --help`"
+        );
+        for f in flags {
+            if !mentions(&doc, &f) {
+                problems.push(format!("afford {command} {f}: not in docs/cli.md"));
+            }
+            all.insert(f);
+        }
+    }
+    // The first cell of every table row that documents a flag.
+    for (n, line) in doc.lines().enumerate() {
+        let Some(cell) = line.strip_prefix("| `--") else {
+            continue;
+        };
+        let name: String = cell
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '-')
+            .collect();
+        if !all.contains(&format!("--{name}")) {
+            problems.push(format!(
+                "docs/cli.md:{}: --{name} is no flag of any command",
+                n + 1
+            ));
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
