@@ -316,9 +316,9 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     let mut unwritten = 0usize;
     let mut write = |target: &Option<PathBuf>, text: Result<String, csv::Error>| {
         if let Some(p) = target {
-            let done = text
-                .map_err(|e| e.to_string())
-                .and_then(|t| report::write_atomic(p, t.as_bytes()).map_err(|e| e.to_string()));
+            let done = text.map_err(|e| e.to_string()).and_then(|t| {
+                crate::atomic::write_bytes(p, t.as_bytes()).map_err(|e| e.to_string())
+            });
             if let Err(e) = done {
                 let _ = writeln!(err, "error: {}: cannot write: {e}", p.display());
                 unwritten += 1;
@@ -405,20 +405,15 @@ fn check_saved_models(saved: &Path, models: &[Model]) -> Result<(), String> {
         .collect();
     let bad = |what: String| format!("{}: {what}", saved.display());
     let text = std::fs::read_to_string(saved).map_err(|e| bad(format!("cannot read: {e}")))?;
-    let doc: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| bad(format!("not a saved result: {e}")))?;
-    let runs = doc["files"][0]["runs"]
-        .as_array()
-        .ok_or_else(|| bad("not a saved result: no runs".into()))?;
-    let mut got: Vec<String> = runs
+    let doc = batch::read_document(&text, saved).map_err(|e| e.to_string())?;
+    let file = doc
+        .files
+        .first()
+        .ok_or_else(|| bad("not a saved result: no file".into()))?;
+    let mut got: Vec<String> = file
+        .runs
         .iter()
-        .map(|r| {
-            key(
-                r["agent"].as_str().unwrap_or("?"),
-                r["height"].as_f64().unwrap_or(f64::NAN),
-                r["hierarchy"].as_str().unwrap_or("?"),
-            )
-        })
+        .map(|r| key(&r.agent, r.height, &r.hierarchy))
         .collect();
     want.sort();
     got.sort();
@@ -511,7 +506,7 @@ fn detect_one(
     }
     if let (Some(target), true) = (saved, done.errors.is_empty()) {
         let json = report::to_json(&done.reports);
-        if let Err(e) = report::write_atomic(target, json.as_bytes()) {
+        if let Err(e) = crate::atomic::write_bytes(target, json.as_bytes()) {
             done.errors.push(batch::printable(&format!(
                 "{}: cannot write: {e}",
                 target.display()
@@ -840,7 +835,7 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
     let mut code = print(out, err, &ev.markdown()).err().unwrap_or(0);
     for (target, text) in [(&req.json, ev.to_json()), (&req.csv, ev.to_csv())] {
         if let Some(p) = target {
-            if let Err(e) = report::write_atomic(p, text.as_bytes()) {
+            if let Err(e) = crate::atomic::write_bytes(p, text.as_bytes()) {
                 let _ = writeln!(err, "error: {}: cannot write: {e}", p.display());
                 code = 2;
             }
