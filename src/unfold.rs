@@ -278,7 +278,7 @@ impl NodeContext<'_> {
             .iter()
             .map(|&s| {
                 let sw = &node.sweeps[s];
-                (sw.theta2 - sw.theta1) * agent.reach(sw.joint)
+                (sw.theta2 - sw.theta1).abs() * agent.reach(sw.joint)
             })
             .sum();
         // Only the branch's joints move; they are rewritten at every step.
