@@ -20,6 +20,15 @@ pub const MAX_JOINTS: usize = 256;
 /// Furthest a joint origin or link end may be from its joint, fraction of H: ten body
 /// heights is no body, and the scene grids and drop searches grow with the body's size.
 pub const MAX_REACH: f64 = 10.0;
+/// Body heights a model may be scaled to, metres: from a toddler (0.3 m) to beyond the
+/// tallest person recorded (2.72 m); a value outside is a typo or centimetres.
+pub const HEIGHT_RANGE: std::ops::RangeInclusive<f64> = 0.3..=3.0;
+
+/// Checks a body height (metres) against [`HEIGHT_RANGE`]; the error says why, without
+/// naming where the value came from (the caller adds the flag, file or key).
+pub fn check_height(height: f64) -> Result<f64, String> {
+    crate::settings::check_range(height, &HEIGHT_RANGE, "body height")
+}
 
 /// One joint (a vertex of H) with its optional body part (the edge to its parent's frame).
 #[derive(Debug, Clone, PartialEq)]
@@ -142,11 +151,8 @@ impl Agent {
     }
 
     fn from_file(file: AgentFile, src: Source, height: f64) -> Result<Agent, ModelError> {
-        if !(height.is_finite() && height > 0.3 && height < 3.0) {
-            return Err(src.invalid_outside(
-                "height",
-                format!("body height {height} m is outside 0.3-3.0 m"),
-            ));
+        if let Err(why) = check_height(height) {
+            return Err(src.invalid_outside("height", why));
         }
         if file.joint.len() > MAX_JOINTS {
             return Err(src.invalid(

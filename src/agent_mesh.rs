@@ -111,7 +111,7 @@ pub fn agent_mesh_bytes(detections: &[Detection]) -> Vec<u8> {
 /// affordance ([`affordance_colour`], the palette of the pictures). The file is written
 /// to a temporary file in the same directory and renamed into place.
 pub fn agent_mesh_ply(detections: &[Detection], path: &Path) -> std::io::Result<()> {
-    crate::report::write_atomic(path, &agent_mesh_bytes(detections))
+    crate::atomic::write_bytes(path, &agent_mesh_bytes(detections))
 }
 
 /// Colour of the points in no detection's segment in [`segments_ply`].

@@ -9,6 +9,8 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
+use crate::report::{Document, JSON_VERSION};
+
 /// What went wrong with a list, a shard, an output folder or a saved output.
 #[derive(Debug, thiserror::Error)]
 pub enum BatchError {
@@ -339,48 +341,33 @@ impl SavedFile {
     }
 }
 
-#[derive(Deserialize)]
-struct Doc {
-    version: u32,
-    files: Vec<DocFile>,
-}
-
-#[derive(Deserialize)]
-struct DocFile {
-    file: String,
-    runs: Vec<DocRun>,
-    detections: Vec<DocDetection>,
-}
-
-#[derive(Deserialize)]
-struct DocRun {
-    agent: String,
-    height: f64,
-}
-
-#[derive(Deserialize)]
-struct DocDetection {
-    agent: String,
-    height: f64,
-    affordances: Vec<String>,
-}
-
-/// Reads a detect JSON (`--json` or one file of `--out-dir`, version 2 or 3).
-fn saved_json(text: &str, path: &Path) -> Result<Vec<SavedFile>, BatchError> {
+/// Reads a detect JSON document (`--json` or one file of `--out-dir`, version 2 to
+/// [`JSON_VERSION`]): the version first, so that another version is named as such rather
+/// than as a missing field.
+pub fn read_document(text: &str, path: &Path) -> Result<Document, BatchError> {
+    #[derive(Deserialize)]
+    struct Version {
+        version: u32,
+    }
     let bad = |what: String| BatchError::Saved {
         path: path.to_path_buf(),
         what,
     };
-    let doc: Doc = serde_json::from_str(text)
-        .map_err(|e| bad(format!("not an `afford detect` JSON output: {e}")))?;
-    // Version 3 only added joint positions: both carry what is read here.
-    if !(2..=crate::report::JSON_VERSION).contains(&doc.version) {
+    let not_ours = |e: serde_json::Error| bad(format!("not an `afford detect` JSON output: {e}"));
+    let v: Version = serde_json::from_str(text).map_err(not_ours)?;
+    // Version 3 only added joint positions, which version 2 documents read as empty.
+    if !(2..=JSON_VERSION).contains(&v.version) {
         return Err(bad(format!(
-            "JSON version {} (this afford reads versions 2 to {})",
-            doc.version,
-            crate::report::JSON_VERSION
+            "JSON version {} (this afford reads versions 2 to {JSON_VERSION})",
+            v.version
         )));
     }
+    serde_json::from_str(text).map_err(not_ours)
+}
+
+/// Reads a detect JSON (`--json` or one file of `--out-dir`, version 2 or 3).
+fn saved_json(text: &str, path: &Path) -> Result<Vec<SavedFile>, BatchError> {
+    let doc = read_document(text, path)?;
     Ok(doc
         .files
         .into_iter()
@@ -626,12 +613,18 @@ mod tests {
 
     #[test]
     fn a_summary_and_a_json_of_the_same_run_read_alike() {
+        // A version 2 document: no `joints`.
         let json = r#"{"version": 2, "files": [{"file": "d/a.ply", "points": 3,
             "dropped_non_finite": 0, "affordances": ["sitting"],
-            "runs": [{"agent": "human", "height": 1.65, "hierarchy": "sitting"},
-                     {"agent": "human", "height": 1.75, "hierarchy": "sitting"}],
-            "detections": [{"agent": "human", "height": 1.75,
-                            "affordances": ["sitting", "backrest"]}]}]}"#;
+            "runs": [{"agent": "human", "height": 1.65, "hierarchy": "sitting",
+                      "hypotheses": 1, "fits": 0, "candidates": 0},
+                     {"agent": "human", "height": 1.75, "hierarchy": "sitting",
+                      "hypotheses": 1, "fits": 1, "candidates": 1}],
+            "detections": [{"detection": 0, "hierarchy": "sitting", "agent": "human",
+                            "height": 1.75, "position": [0, 0, 0.5], "yaw_deg": 0,
+                            "affordances": ["sitting", "backrest"], "score": 1,
+                            "stability": 1, "availability": 1, "local_scores": {},
+                            "pose_deg": {}, "segment_points": 3}]}]}"#;
         let summary = "file,sitting,backrest,agent,height\n\
                        d/a.ply,0,0,human,1.650\nd/a.ply,1,1,human,1.750\n";
         let a = saved_json(json, Path::new("x.json")).unwrap();
@@ -645,6 +638,31 @@ mod tests {
                 .to_string()
                 .contains("version 1")
         );
+    }
+
+    #[test]
+    fn the_reader_reads_what_the_writer_writes() {
+        let text = crate::report::to_json(&[]);
+        let doc = read_document(&text, Path::new("x.json")).unwrap();
+        assert_eq!(doc.version, JSON_VERSION);
+        // A written document with one detection reads back equal, joints included.
+        let json = r#"{"version": 3, "files": [{"file": "a.ply", "points": 1,
+            "dropped_non_finite": 0, "affordances": ["sitting"],
+            "runs": [{"agent": "human", "height": 1.75, "hierarchy": "sitting",
+                      "hypotheses": 1, "fits": 1, "candidates": 1}],
+            "detections": [{"detection": 0, "hierarchy": "sitting", "agent": "human",
+                            "height": 1.75, "position": [0, 0, 0.5], "yaw_deg": 90,
+                            "affordances": ["sitting"], "score": 1, "stability": 1,
+                            "availability": 1, "local_scores": {"sitting": 1},
+                            "pose_deg": {"hip_l": 90}, "joints": {"pelvis": [0, 0, 0.5]},
+                            "segment_points": 1}]}]}"#;
+        let doc = read_document(json, Path::new("x.json")).unwrap();
+        let again = serde_json::to_string(&doc).unwrap();
+        assert_eq!(read_document(&again, Path::new("y.json")).unwrap(), doc);
+        assert_eq!(doc.files[0].detections[0].joints["pelvis"], [0.0, 0.0, 0.5]);
+        // A document of another version is named by its version, not a missing field.
+        let e = read_document(r#"{"version": 4}"#, Path::new("z.json")).unwrap_err();
+        assert!(e.to_string().contains("JSON version 4"), "{e}");
     }
 
     #[test]

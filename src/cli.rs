@@ -5,13 +5,14 @@
 
 use std::ffi::OsString;
 use std::io::IsTerminal;
+use std::io::Write;
 use std::path::PathBuf;
 
 use crate::batch::{BatchError, Shard};
 use crate::cloud::{parse_matrix, FloorMode, FrameOptions, Units, Up};
-use crate::detect::DetectConfig;
 use crate::input::InputOptions;
-use crate::run::{run_detect, run_inspect, DetectRequest, InspectRequest, ModelChoice};
+use crate::run::{run_detect, run_inspect, DetectRequest, InspectRequest};
+use crate::settings::{ModelChoice, Settings};
 use clap::{Parser, Subcommand};
 
 /// Finds where a person could sit or lie in a 3D point cloud, and how.
@@ -88,16 +89,8 @@ struct SynthArgs {
 struct EvalArgs {
     /// A labels.csv: column `file` (relative to it), then one 0/1 column per affordance.
     labels: PathBuf,
-    /// Body heights, metres.
-    #[arg(long, value_delimiter = ',', default_value = "1.75", value_parser = parse_height)]
-    heights: Vec<f64>,
-    /// Body model: a TOML file or a built-in name (human, child) [default: human].
-    #[arg(long, value_name = "FILE|NAME")]
-    agent: Option<String>,
-    /// Affordance hierarchies: TOML files, folders or built-in names, comma-separated
-    /// [default: every built-in one].
-    #[arg(long, value_name = "FILE|DIR|NAME", value_delimiter = ',')]
-    affordances: Vec<String>,
+    #[command(flatten)]
+    models: ModelArgs,
     /// Write the scores as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -106,7 +99,7 @@ struct EvalArgs {
     csv: Option<PathBuf>,
     /// Score saved `afford detect` results instead of running detection: --json files,
     /// --summary CSV files, or --out-dir folders (their .json files), e.g. of several
-    /// shards. They must hold the same --agent and --affordances at every --heights.
+    /// shards. They must hold the same --agent and --affordances at every --height.
     #[arg(long, value_name = "PATH", num_args = 1..)]
     from: Vec<PathBuf>,
     #[command(flatten)]
@@ -127,21 +120,23 @@ struct ModelArgs {
     #[arg(long, value_name = "FILE|DIR|NAME", value_delimiter = ',')]
     affordances: Vec<String>,
     /// Body heights of the agents, metres (0.3 to 3.0), comma-separated [default: 1.75].
-    #[arg(long, value_delimiter = ',', value_parser = parse_height)]
+    #[arg(long, visible_alias = "heights", value_delimiter = ',', value_parser = parse_height)]
     height: Vec<f64>,
-    /// Voxel edge length of the scene, metres.
+    /// Voxel edge length of the scene, metres (0.002 to 0.1) [default: 0.02]; the contact
+    /// resolution (a quarter voxel) and the segment growing distance (1.5 voxels) follow it.
     #[arg(long, value_parser = parse_voxel)]
     voxel: Option<f64>,
 }
 
-impl ModelArgs {
-    fn choice(&self) -> ModelChoice {
-        ModelChoice {
-            agents: self.agent.clone(),
-            hierarchies: self.affordances.clone(),
-            heights: self.height.clone(),
-        }
-    }
+/// The one place where the flags `detect`, `inspect` and `eval` share become the library's
+/// validated [`Settings`].
+fn settings(models: &ModelArgs, input: &InputArgs) -> Result<Settings, String> {
+    let choice = ModelChoice {
+        agents: models.agent.clone(),
+        hierarchies: models.affordances.clone(),
+        heights: models.height.clone(),
+    };
+    Settings::new(choice, models.voxel, input.options()?).map_err(|e| e.to_string())
 }
 
 #[derive(clap::Args)]
@@ -162,7 +157,7 @@ struct InputArgs {
     #[arg(long, default_value = "keep")]
     floor: FloorMode,
     /// Sample meshes (OBJ, OFF, STL, PLY with faces) at this many points per square metre.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_density)]
     sample: Option<f64>,
     #[command(flatten)]
     source: crate::source_args::SourceArgs,
@@ -194,13 +189,6 @@ impl InputArgs {
                 })?)
             }
         };
-        if let Some(d) = self.sample {
-            if !(d.is_finite() && d > 0.0) {
-                return Err(format!(
-                    "--sample {d}: must be a positive density (points per square metre)"
-                ));
-            }
-        }
         Ok(InputOptions {
             frame: FrameOptions {
                 up: self.up,
@@ -311,12 +299,15 @@ fn parse_shard(s: &str) -> Result<Shard, String> {
 
 fn parse_height(s: &str) -> Result<f64, String> {
     let h: f64 = s.parse().map_err(|e| format!("{e}"))?;
-    if h.is_finite() && (0.3..=3.0).contains(&h) {
-        Ok(h)
-    } else {
-        Err(format!(
-            "body height {h} m is outside 0.3-3.0 m (metres, not centimetres?)"
-        ))
+    crate::agent::check_height(h).map_err(|e| format!("{e} (metres, not centimetres?)"))
+}
+
+fn parse_density(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(d) if d.is_finite() && d > 0.0 => Ok(d),
+        _ => Err(format!(
+            "'{s}' is not a positive density (points per square metre)"
+        )),
     }
 }
 
@@ -346,19 +337,7 @@ fn parse_count(s: &str) -> Result<usize, String> {
 
 fn parse_voxel(s: &str) -> Result<f64, String> {
     let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
-    if v.is_finite() && (0.002..=0.1).contains(&v) {
-        Ok(v)
-    } else {
-        Err(format!("voxel size {v} m is outside 0.002-0.1 m"))
-    }
-}
-
-fn config(m: &ModelArgs) -> DetectConfig {
-    let mut config = DetectConfig::default();
-    if let Some(v) = m.voxel {
-        config.scene.voxel_size = v;
-    }
-    config
+    crate::settings::check_voxel(v)
 }
 
 /// Runs the command line on `args` (the program name first, as `std::env::args_os`
@@ -377,12 +356,15 @@ where
             return u8::try_from(e.exit_code()).unwrap_or(2);
         }
     };
+    // Standard error carries the diagnostics: when it cannot be written, the exit code is
+    // all that is left, so its write errors are not reported further.
+    let (mut out, mut err) = (std::io::stdout().lock(), std::io::stderr().lock());
     match cli.command {
         Command::Detect(a) => {
-            let input = match a.input.options() {
+            let settings = match settings(&a.models, &a.input) {
                 Ok(i) => i,
                 Err(e) => {
-                    eprintln!("error: {e}");
+                    let _ = writeln!(err, "error: {e}");
                     return 2;
                 }
             };
@@ -391,7 +373,7 @@ where
                     .num_threads(n)
                     .build_global()
                 {
-                    eprintln!("error: --threads {n}: {e}");
+                    let _ = writeln!(err, "error: --threads {n}: {e}");
                     return 2;
                 }
             }
@@ -402,22 +384,16 @@ where
                 out_dir: a.out_dir,
                 resume: a.resume,
                 log_json: a.log_json,
-                models: a.models.choice(),
+                settings,
                 json: a.json,
                 csv: a.csv,
                 summary: a.summary,
                 segments: a.segments,
                 mesh: a.mesh,
                 mesh_scene: a.mesh_scene,
-                config: config(&a.models),
-                input,
                 progress: !a.quiet && std::io::stderr().is_terminal(),
             };
-            let code = run_detect(
-                &req,
-                &mut std::io::stdout().lock(),
-                &mut std::io::stderr().lock(),
-            );
+            let code = run_detect(&req, &mut out, &mut err);
             code as u8
         }
         Command::Synth(a) => {
@@ -433,33 +409,30 @@ where
                     wide: a.mix == "wide",
                     camera_frame: a.frame == "camera",
                 },
-                &mut std::io::stdout().lock(),
-                &mut std::io::stderr().lock(),
+                &mut out,
+                &mut err,
             );
             code as u8
         }
         Command::Eval(a) => {
-            let input = match a.input.options() {
+            let settings = match settings(&a.models, &a.input) {
                 Ok(i) => i,
                 Err(e) => {
-                    eprintln!("error: {e}");
+                    let _ = writeln!(err, "error: {e}");
                     return 2;
                 }
             };
             let code = crate::run::run_eval(
                 &crate::run::EvalRequest {
                     labels: a.labels,
-                    heights: a.heights,
-                    agent: a.agent,
-                    affordances: a.affordances,
+                    settings,
                     json: a.json,
                     csv: a.csv,
-                    input,
                     from: a.from,
                     quiet: a.quiet || !std::io::stderr().is_terminal(),
                 },
-                &mut std::io::stdout().lock(),
-                &mut std::io::stderr().lock(),
+                &mut out,
+                &mut err,
             );
             code as u8
         }
@@ -467,7 +440,7 @@ where
             let options = match a.input_frame.options() {
                 Ok(i) => i,
                 Err(e) => {
-                    eprintln!("error: {e}");
+                    let _ = writeln!(err, "error: {e}");
                     return 2;
                 }
             };
@@ -477,33 +450,23 @@ where
                 ascii: a.ascii,
                 options,
             };
-            let code = crate::run::run_convert(
-                &req,
-                &mut std::io::stdout().lock(),
-                &mut std::io::stderr().lock(),
-            );
+            let code = crate::run::run_convert(&req, &mut out, &mut err);
             code as u8
         }
         Command::Inspect(a) => {
-            let input = match a.input.options() {
+            let settings = match settings(&a.models, &a.input) {
                 Ok(i) => i,
                 Err(e) => {
-                    eprintln!("error: {e}");
+                    let _ = writeln!(err, "error: {e}");
                     return 2;
                 }
             };
             let req = InspectRequest {
-                input,
+                settings,
                 file: a.file,
-                models: a.models.choice(),
                 png: a.png,
-                config: config(&a.models),
             };
-            let code = run_inspect(
-                &req,
-                &mut std::io::stdout().lock(),
-                &mut std::io::stderr().lock(),
-            );
+            let code = run_inspect(&req, &mut out, &mut err);
             code as u8
         }
     }

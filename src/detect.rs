@@ -28,23 +28,41 @@ pub struct DetectConfig {
     pub segment: SegmentConfig,
 }
 
+/// The default voxel edge, metres: at most 0.02 m, finer than the 3-4 cm radius of the
+/// thinnest limb.
+pub const DEFAULT_VOXEL: f64 = 0.02;
+/// Contact resolution in voxels: a quarter voxel (5 mm at 2 cm), under 1 degree of trunk
+/// recline at shoulder height.
+pub const CONTACT_VOXELS: f64 = 0.25;
+/// Region-growing distance in voxels: 1.5 voxels (3 cm at 2 cm) closes gaps of
+/// depth-camera sampling at 1-2 m without jumping between objects.
+pub const GROW_VOXELS: f64 = 1.5;
+
 impl Default for DetectConfig {
     fn default() -> Self {
+        Self::for_voxel(DEFAULT_VOXEL)
+    }
+}
+
+impl DetectConfig {
+    /// The defaults for a scene of `voxel_size` metres: the numbers defined as fractions
+    /// of the voxel ([`CONTACT_VOXELS`], [`GROW_VOXELS`]) follow it. The caller checks the
+    /// size (see [`crate::settings::VOXEL_RANGE`]).
+    pub fn for_voxel(voxel_size: f64) -> Self {
         DetectConfig {
             heightmap: HeightMapConfig::default(),
             scene: SceneConfig {
-                // At most 0.02 m: finer than the 3-4 cm radius of the thinnest limb.
-                voxel_size: 0.02,
+                voxel_size,
                 // Paper, section 3.1: agent and scene share the ground plane z = 0.
                 floor: true,
                 // The agent's limbs sweep up to ~0.3 m beyond a seat; further out the box bound suffices.
                 field_margin: 0.3,
             },
-            // 5 mm: a quarter voxel, under 1 degree of trunk recline at shoulder height.
-            contact: ContactConfig { resolution: 0.005 },
+            contact: ContactConfig {
+                resolution: CONTACT_VOXELS * voxel_size,
+            },
             segment: SegmentConfig {
-                // 1.5 voxels: closes gaps of depth-camera sampling at 1-2 m without jumping between objects.
-                grow_distance: 0.03,
+                grow_distance: GROW_VOXELS * voxel_size,
                 // Points within 5 cm of the floor are floor (noise of a Kinect-like sensor at 2 m is ~1-2 cm).
                 floor_height: 0.05,
                 // Seeds: the seat under the pelvis, within a hip-breadth radius.

@@ -29,10 +29,11 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::cloud;
-use crate::detect::{detect_all, DetectConfig};
+use crate::detect::detect_all;
 use crate::model::ModelError;
-use crate::model_set::{ids as ids_of, load_set, Model, Source};
+use crate::model_set::{ids as ids_of, load_set, Model};
 use crate::report::{self, FileReport};
+use crate::settings::{ModelChoice, Settings};
 
 /// What went wrong before any file could be scored.
 #[derive(Debug, thiserror::Error)]
@@ -214,9 +215,11 @@ pub struct Mistake {
     pub false_negatives: Vec<String>,
 }
 
-/// Results at one body height.
+/// Results of one body: an agent at one height.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct HeightResult {
+    /// The agent's name (its file's `name`).
+    pub agent: String,
     /// Body height, metres.
     pub height: f64,
     /// Scores over the non-doubtful rows, in id order.
@@ -246,7 +249,7 @@ pub struct Evaluation {
     pub doubtful_files: usize,
     /// Files that could not be read, with the error.
     pub failed: Vec<(String, String)>,
-    /// One entry per height, in the order asked.
+    /// One entry per body, in the order asked: each agent at every height.
     pub heights: Vec<HeightResult>,
     /// Scored from saved `afford detect` outputs ([`evaluate_saved`]) rather than by
     /// running detection; they hold no per-point labels, so there is no segmentation IoU.
@@ -258,6 +261,23 @@ fn fmt(x: Option<f64>) -> String {
 }
 
 impl Evaluation {
+    /// Whether the bodies are of more than one agent.
+    fn several_agents(&self) -> bool {
+        self.heights
+            .iter()
+            .any(|h| h.agent != self.heights[0].agent)
+    }
+
+    /// How a body is named in the report: its height, with the agent's name before it
+    /// when several agents were scored (`child 1.20 m`).
+    fn body(&self, h: &HeightResult) -> String {
+        if self.several_agents() {
+            format!("{} {:.2} m", h.agent, h.height)
+        } else {
+            format!("{:.2} m", h.height)
+        }
+    }
+
     /// A markdown report: the main table in the shape of the paper's Table 1 (rows =
     /// affordance, column groups = body height with F, P, R), then the doubtful rows, the
     /// segmentation IoU and the failed files.
@@ -266,10 +286,8 @@ impl Evaluation {
         let table = |s: &mut String, pick: &dyn Fn(&HeightResult) -> &Vec<Score>| {
             s.push_str("| affordance |");
             for h in &self.heights {
-                s.push_str(&format!(
-                    " F {0:.2} m | P {0:.2} m | R {0:.2} m |",
-                    h.height
-                ));
+                let b = self.body(h);
+                s.push_str(&format!(" F {b} | P {b} | R {b} |"));
             }
             s.push_str("\n|---|");
             for _ in &self.heights {
@@ -312,8 +330,8 @@ impl Evaluation {
         }
         for h in self.heights.iter().filter(|_| !self.from_saved) {
             s.push_str(&format!(
-                "- {:.2} m: {} over {} files\n",
-                h.height,
+                "- {}: {} over {} files\n",
+                self.body(h),
                 fmt(h.mean_iou),
                 h.iou_files
             ));
@@ -323,8 +341,8 @@ impl Evaluation {
                 continue;
             }
             s.push_str(&format!(
-                "\nWrong files at {:.2} m (false positives / false negatives):\n\n",
-                h.height
+                "\nWrong files at {} (false positives / false negatives):\n\n",
+                self.body(h)
             ));
             for m in &h.mistakes {
                 let list = |v: &Vec<String>| {
@@ -351,8 +369,8 @@ impl Evaluation {
                 .collect();
             if !found.is_empty() {
                 s.push_str(&format!(
-                    "\nDoubtful files with affordances found at {:.2} m: {}\n",
-                    h.height,
+                    "\nDoubtful files with affordances found at {}: {}\n",
+                    self.body(h),
                     found.join("; ")
                 ));
             }
@@ -371,15 +389,22 @@ impl Evaluation {
         serde_json::to_string_pretty(self).unwrap_or_else(|_| "{}".into())
     }
 
-    /// One CSV row per height, set (`main` or `doubtful`) and affordance:
-    /// `height,set,affordance,tp,fp,fn,tn,precision,recall,f` (empty cell = undefined).
+    /// One CSV row per body, set (`main` or `doubtful`) and affordance:
+    /// `height,set,affordance,tp,fp,fn,tn,precision,recall,f` (empty cell = undefined),
+    /// with a first column `agent` when several agents were scored.
     pub fn to_csv(&self) -> String {
         let o = |x: Option<f64>| x.map_or_else(String::new, |v| format!("{v:.4}"));
-        let mut s = String::from("height,set,affordance,tp,fp,fn,tn,precision,recall,f\n");
+        let several = self.several_agents();
+        let mut s = String::from(if several { "agent," } else { "" });
+        s.push_str("height,set,affordance,tp,fp,fn,tn,precision,recall,f\n");
         for h in &self.heights {
             for (set, scores) in [("main", &h.scores), ("doubtful", &h.doubtful_scores)] {
                 for sc in scores {
                     let c = sc.counts;
+                    if several {
+                        s.push_str(&h.agent);
+                        s.push(',');
+                    }
                     s.push_str(&format!(
                         "{:.3},{set},{},{},{},{},{},{},{},{}\n",
                         h.height,
@@ -412,8 +437,9 @@ pub fn iou(a: &[bool], b: &[bool]) -> Option<f64> {
 /// What one file gave at every height: found ids and segmentation IoU.
 type FileOutcome = Result<Vec<(Vec<String>, Option<f64>)>, String>;
 
-/// What an evaluation scores against: the models (one set per height), the label rows,
-/// the ids of the hierarchies and the scored ids (those with a label column).
+/// What an evaluation scores against: the models (one set per body, each agent at every
+/// height), the label rows, the ids of the hierarchies and the scored ids (those with a
+/// label column).
 struct Setup {
     models: Vec<Vec<Model>>,
     rows: Vec<LabelRow>,
@@ -421,16 +447,25 @@ struct Setup {
     ids: Vec<String>,
 }
 
-/// Loads the models at every height and reads the labels.
-fn setup(
-    labels_csv: &Path,
-    heights: &[f64],
-    agent: &Source,
-    hierarchies: &[Source],
-) -> Result<Setup, EvalError> {
-    let models = heights
+impl Setup {
+    /// The bodies, `(agent name, height)`, one per model set.
+    fn bodies(&self) -> Vec<(String, f64)> {
+        self.models
+            .iter()
+            .filter_map(|set| set.first())
+            .map(|m| (m.agent.name.clone(), m.agent.height))
+            .collect()
+    }
+}
+
+/// Loads the models of every body and reads the labels.
+fn setup(labels_csv: &Path, choice: &ModelChoice) -> Result<Setup, EvalError> {
+    let (agents, hierarchies) = choice.sources()?;
+    let heights = choice.heights();
+    let models = agents
         .iter()
-        .map(|&h| load_set(std::slice::from_ref(agent), hierarchies, &[h]))
+        .flat_map(|a| heights.iter().map(move |&h| (a, h)))
+        .map(|(a, h)| load_set(std::slice::from_ref(a), &hierarchies, &[h]))
         .collect::<Result<Vec<_>, _>>()?;
     let text = std::fs::read_to_string(labels_csv).map_err(|source| EvalError::Io {
         path: labels_csv.to_path_buf(),
@@ -451,28 +486,27 @@ fn setup(
     })
 }
 
-/// Runs detection on every file of `labels_csv` (paths relative to it) for the agent
-/// `agent` scaled to each of `heights` (metres) with the hierarchy `affordances` (the
-/// built-in models where `None`), and
-/// scores the answers (see the module documentation). Files run in parallel (rayon);
-/// `progress` shows a progress bar on stderr.
+/// Runs detection on every file of `labels_csv` (paths relative to it) with every body of
+/// `settings` (each agent at each height, with every hierarchy), reading the files and
+/// building the scene as `settings` says, and scores the answers (see the module
+/// documentation). Files run in parallel (rayon); `progress` shows a progress bar on stderr.
 pub fn evaluate(
     labels_csv: &Path,
-    heights: &[f64],
-    agent: &Source,
-    hierarchies: &[Source],
-    input: &crate::input::InputOptions,
+    settings: &Settings,
     progress: bool,
 ) -> Result<Evaluation, EvalError> {
+    let setup = setup(labels_csv, &settings.models)?;
+    let bodies = setup.bodies();
     let Setup {
         models, rows, ids, ..
-    } = setup(labels_csv, heights, agent, hierarchies)?;
+    } = setup;
     let bar = if progress {
         indicatif::ProgressBar::new(rows.len() as u64)
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let cfg = DetectConfig::default();
+    let cfg = &settings.detect;
+    let input = &settings.input;
     let outcomes: Vec<FileOutcome> = rows
         .par_iter()
         .map(|row| {
@@ -494,7 +528,7 @@ pub fn evaluate(
                 models
                     .iter()
                     .map(|set| {
-                        let outcomes = detect_all(&loaded.cloud, set, &cfg);
+                        let outcomes = detect_all(&loaded.cloud, set, cfg);
                         let r = FileReport::new(
                             row.file.clone(),
                             loaded.cloud.len(),
@@ -523,41 +557,36 @@ pub fn evaluate(
         })
         .collect();
     bar.finish_and_clear();
-    Ok(score(labels_csv, heights, &ids, &rows, &outcomes))
+    Ok(score(labels_csv, &bodies, &ids, &rows, &outcomes))
 }
 
 /// Scores saved `afford detect` outputs (`--json` files, `--summary` CSV files, `--out-dir`
 /// folders: see [`crate::batch::read_saved`]) against `labels_csv`, as [`evaluate`] would
 /// score running detection with the same models, without the segmentation IoU. A labelled
 /// file is matched to the saved file whose path ends with its `file` cell; a labelled file
-/// not saved, or saved without a run of the agent at one of `heights`, counts as failed.
+/// not saved, or saved without a run of one of the bodies of `models`, counts as failed.
 pub fn evaluate_saved(
     labels_csv: &Path,
-    heights: &[f64],
-    agent: &Source,
-    hierarchies: &[Source],
+    models: &ModelChoice,
     saved: &[PathBuf],
 ) -> Result<Evaluation, EvalError> {
+    let setup = setup(labels_csv, models)?;
+    let bodies = setup.bodies();
     let Setup {
-        models,
         rows,
         hier_ids,
         ids,
-    } = setup(labels_csv, heights, agent, hierarchies)?;
+        ..
+    } = setup;
     let saved = crate::batch::read_saved(saved)?;
-    let agent = models
-        .first()
-        .and_then(|m| m.first())
-        .map(|m| m.agent.name.clone())
-        .unwrap_or_default();
     let outcomes: Vec<FileOutcome> = rows
         .iter()
         .map(|row| {
             let s = crate::batch::find_saved(&saved, &row.file, &row.path)?;
-            heights
+            bodies
                 .iter()
-                .map(|&h| {
-                    let body = s.body(&agent, h).ok_or_else(|| {
+                .map(|(agent, h)| {
+                    let body = s.body(agent, *h).ok_or_else(|| {
                         format!(
                             "{}: no saved run of {agent} at {h:.3} m",
                             s.source.display()
@@ -574,15 +603,15 @@ pub fn evaluate_saved(
                 .collect()
         })
         .collect();
-    let mut ev = score(labels_csv, heights, &ids, &rows, &outcomes);
+    let mut ev = score(labels_csv, &bodies, &ids, &rows, &outcomes);
     ev.from_saved = true;
     Ok(ev)
 }
 
-/// Scores the outcomes of `rows` (one entry per row, one element per height).
+/// Scores the outcomes of `rows` (one entry per row, one element per body).
 fn score(
     labels_csv: &Path,
-    heights: &[f64],
+    bodies: &[(String, f64)],
     ids: &[String],
     rows: &[LabelRow],
     outcomes: &[FileOutcome],
@@ -604,10 +633,10 @@ fn score(
         .zip(outcomes)
         .filter(|(r, o)| r.doubtful.is_some() && ok(o))
         .count();
-    let heights = heights
+    let heights = bodies
         .iter()
         .enumerate()
-        .map(|(k, &height)| {
+        .map(|(k, (agent, height))| {
             let mut main = vec![Counts::default(); ids.len()];
             let mut doubt = vec![Counts::default(); ids.len()];
             let mut mistakes = Vec::new();
@@ -649,7 +678,8 @@ fn score(
                 }
             }
             HeightResult {
-                height,
+                agent: agent.clone(),
+                height: *height,
                 scores: ids
                     .iter()
                     .zip(main)
@@ -775,7 +805,13 @@ mod tests {
             Ok(vec![(s(&["sitting"]), None)]),
             Err("cannot read".into()),
         ];
-        let e = score(Path::new("l.csv"), &[1.75], &cols, &rows, &outcomes);
+        let e = score(
+            Path::new("l.csv"),
+            &[("human".into(), 1.75)],
+            &cols,
+            &rows,
+            &outcomes,
+        );
         assert_eq!((e.files, e.doubtful_files, e.failed.len()), (3, 1, 1));
         let h = &e.heights[0];
         assert_eq!(h.scores[0].counts, c(2, 1, 0, 0));
@@ -791,6 +827,29 @@ mod tests {
             .to_csv()
             .contains("1.750,main,backrest,1,1,0,1,0.5000,1.0000,0.6667"));
         assert!(e.to_json().contains("\"fn\": 0"));
+        assert!(md.contains(" F 1.75 m |"), "{md}");
+    }
+
+    #[test]
+    fn several_agents_are_scored_and_named_apart() {
+        let text = "file,sitting\na.ply,1\nb.ply,0\n";
+        let (rows, cols) = parse_labels(text, &["sitting"], Path::new(".")).unwrap();
+        let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+        // The adult finds sitting on both files, the child on neither.
+        let outcomes: Vec<FileOutcome> = vec![
+            Ok(vec![(s(&["sitting"]), None), (s(&[]), None)]),
+            Ok(vec![(s(&["sitting"]), None), (s(&[]), None)]),
+        ];
+        let bodies = [("human".to_string(), 1.75), ("child".to_string(), 1.2)];
+        let e = score(Path::new("l.csv"), &bodies, &cols, &rows, &outcomes);
+        assert_eq!(e.heights[0].scores[0].counts, c(1, 1, 0, 0));
+        assert_eq!(e.heights[1].scores[0].counts, c(0, 0, 1, 1));
+        assert_eq!(e.heights[1].agent, "child");
+        let md = e.markdown();
+        assert!(md.contains(" F child 1.20 m |"), "{md}");
+        let csv = e.to_csv();
+        assert!(csv.starts_with("agent,height,set,"), "{csv}");
+        assert!(csv.contains("\nchild,1.200,main,sitting,0,0,1,1,"), "{csv}");
     }
 
     #[test]

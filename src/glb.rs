@@ -262,7 +262,7 @@ pub fn write_agents_glb(
     detections: &[Detection],
     points: Option<ScenePoints>,
 ) -> std::io::Result<()> {
-    crate::report::write_atomic(path, &agents_glb(file, detections, points))
+    crate::atomic::write_bytes(path, &agents_glb(file, detections, points))
 }
 
 #[cfg(test)]

@@ -115,7 +115,7 @@ pub struct Sweep {
     pub joint: usize,
     /// Start angle, radians.
     pub theta1: f64,
-    /// End angle, radians (theta1 <= theta2).
+    /// End angle, radians: above or below theta1 (a sweep may run either way).
     pub theta2: f64,
     /// Default (preferred) angle, radians.
     pub thetad: f64,
@@ -344,6 +344,7 @@ impl Hierarchy {
             if !deg.is_finite() {
                 return Err(src.invalid(&key, "must be a finite angle"));
             }
+            names.within_limit(&key, j, &agent.joints[j].axis, *deg)?;
             initial.angles[j] = deg.to_radians();
         }
         let fit = Key::top("fit");
@@ -589,6 +590,39 @@ struct Names<'a> {
 }
 
 impl Names<'_> {
+    /// Checks that `deg` (degrees, about `axis`) is within the agent's limit of joint `j`.
+    /// An angle about the joint's own axis is compared as it is, about the reversed axis
+    /// with its sign turned; about any other axis there is no limit to compare with.
+    fn within_limit(
+        &self,
+        key: &Key,
+        j: usize,
+        axis: &Unit<Vector3<f64>>,
+        deg: f64,
+    ) -> Result<(), ModelError> {
+        let joint = &self.agent.joints[j];
+        let along = joint.axis.dot(axis);
+        let own = if along > 1.0 - 1e-9 {
+            deg
+        } else if along < -1.0 + 1e-9 {
+            -deg
+        } else {
+            return Ok(());
+        };
+        let (lo, hi) = (joint.limit.0.to_degrees(), joint.limit.1.to_degrees());
+        // A tolerance for the round trip of the limit through radians.
+        if own < lo - 1e-9 || own > hi + 1e-9 {
+            return Err(self.src.invalid(
+                key,
+                format!(
+                    "joint `{}` at {own} deg is outside its limit {lo:.1} to {hi:.1} deg (agent `{}`)",
+                    joint.name, self.agent.name
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     fn joint(&self, key: &Key, name: &str) -> Result<usize, ModelError> {
         self.agent.joint_index(name).ok_or_else(|| {
             self.src.invalid(
@@ -659,15 +693,6 @@ fn resolve_node(
                 return Err(src.invalid(&sk.key(name), "must be a finite angle"));
             }
         }
-        if s.theta1 > s.theta2 {
-            return Err(src.invalid(
-                &sk.key("theta1"),
-                format!(
-                    "theta1 = {} exceeds theta2 = {} (a sweep turns from theta1 up to theta2)",
-                    s.theta1, s.theta2
-                ),
-            ));
-        }
         if sweeps.iter().any(|o| o.joint == j) {
             return Err(src.invalid(
                 &sk.key("joint"),
@@ -693,6 +718,13 @@ fn resolve_node(
                 Unit::new_normalize(v)
             }
         };
+        for (name, v) in [
+            ("theta1", s.theta1),
+            ("theta2", s.theta2),
+            ("thetad", s.thetad),
+        ] {
+            names.within_limit(&sk.key(name), j, &axis, v)?;
+        }
         sweeps.push(Sweep {
             joint: j,
             theta1: s.theta1.to_radians(),
@@ -723,6 +755,9 @@ fn resolve_node(
                 format!("joint `{}` is spread twice", sp.joint),
             ));
         }
+        for &a in &sp.angles {
+            names.within_limit(&sk.key("angles"), j, &agent.joints[j].axis, a)?;
+        }
         spreads.push(Spread {
             joint: j,
             angles: sp.angles.iter().map(|a| a.to_radians()).collect(),
@@ -737,6 +772,9 @@ fn resolve_node(
                 &ck.key("lower"),
                 format!("lower = {} must not exceed upper = {}", c.lower, c.upper),
             ));
+        }
+        for (name, v) in [("lower", c.lower), ("upper", c.upper)] {
+            names.within_limit(&ck.key(name), j, &agent.joints[j].axis, v)?;
         }
         clamps.push(Clamp {
             joint: j,
@@ -861,13 +899,51 @@ mod tests {
     }
 
     #[test]
-    fn a_sweep_from_above_its_end_is_named() {
-        let (e, line) = edited("theta1 = 0.0, theta2 = 30.0", "theta1 = 30.0, theta2 = 0.0");
+    fn every_built_in_sweep_turns_about_its_joints_own_axis() {
+        // One sign convention: a hip flexed 90 deg is +90 in sitting and in lying alike.
+        let a = agent();
+        for (name, text) in crate::model_set::BUILTIN_HIERARCHIES {
+            let h = Hierarchy::from_toml(text, Path::new(name), &a).unwrap();
+            for n in &h.nodes {
+                for s in &n.sweeps {
+                    assert_eq!(s.axis, a.joints[s.joint].axis, "{name} {}", n.id);
+                }
+            }
+        }
+        let lying = crate::model_set::BUILTIN_HIERARCHIES[1].1;
+        let h = Hierarchy::from_toml(lying, Path::new("lying.toml"), &a).unwrap();
+        let hip = a.joint_index("hip_l").unwrap();
+        let s = h.nodes[0].sweeps.iter().find(|s| s.joint == hip).unwrap();
+        assert_eq!(s.thetad.to_degrees().round(), 90.0);
+    }
+
+    #[test]
+    fn a_sweep_may_run_downwards() {
+        let a = agent();
+        let text =
+            BUILTIN_SITTING.replace("theta1 = 0.0, theta2 = 30.0", "theta1 = 30.0, theta2 = 0.0");
+        let h = Hierarchy::from_toml(&text, Path::new("h.toml"), &a).unwrap();
+        let s = &h.nodes.iter().find(|n| n.id == "headrest").unwrap().sweeps[0];
+        assert!(s.theta1 > s.theta2);
+    }
+
+    #[test]
+    fn angles_beyond_a_joint_limit_are_named_with_value_and_limit() {
+        // The neck extends to 60 deg (agents/human.toml).
+        let (e, line) = edited("theta1 = 0.0, theta2 = 30.0", "theta1 = 0.0, theta2 = 90.0");
         names(
             &e,
             line,
-            "node.headrest.sweep.neck.theta1",
-            "exceeds theta2",
+            "node.headrest.sweep.neck.theta2",
+            "joint `neck` at 90 deg is outside its limit -45.0 to 60.0 deg (agent `human`)",
+        );
+        // The knee flexes from 0 to 150 deg.
+        let (e, line) = edited("knee_l = 90.0", "knee_l = -10.0");
+        names(
+            &e,
+            line,
+            "initial_pose.knee_l",
+            "joint `knee_l` at -10 deg is outside its limit",
         );
     }
 

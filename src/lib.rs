@@ -33,6 +33,7 @@ pub mod report;
 pub mod run;
 pub mod scene;
 pub mod select;
+pub mod settings;
 mod source_args;
 pub mod synth;
 pub mod unfold;

@@ -280,7 +280,7 @@ impl Image {
     /// Saves the image as PNG at `path`, atomically: a temporary file in the same
     /// directory is written, synced and renamed into place.
     pub fn save_png(&self, path: &Path) -> std::io::Result<()> {
-        crate::report::write_atomic(path, &self.png_bytes()?)
+        crate::atomic::write_bytes(path, &self.png_bytes()?)
     }
 }
 

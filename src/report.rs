@@ -4,9 +4,9 @@
 //!
 //! Numbers are printed with fixed decimals so that the same input gives the same bytes.
 
-use std::path::Path;
+use std::collections::BTreeMap;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::detect::{Detection, Outcome, Stats};
 use crate::model_set::Model;
@@ -111,57 +111,101 @@ fn round(x: f64, d: i32) -> f64 {
     }
 }
 
-#[derive(Serialize)]
-struct JsonDetection<'a> {
-    detection: usize,
-    hierarchy: &'a str,
-    agent: &'a str,
-    height: f64,
-    position: [f64; 3],
-    yaw_deg: f64,
-    affordances: &'a [String],
-    score: f64,
-    stability: f64,
-    availability: f64,
-    local_scores: serde_json::Map<String, serde_json::Value>,
-    pose_deg: serde_json::Map<String, serde_json::Value>,
-    joints: serde_json::Map<String, serde_json::Value>,
-    segment_points: usize,
+/// The JSON document of `afford detect --json` (and of each `--out-dir` file): version
+/// [`JSON_VERSION`], one entry per input cloud. [`to_json`] writes it and
+/// [`crate::batch::read_saved`] reads it, with these same types. Numbers are rounded as
+/// written: positions, scores and joint positions to 4 decimals, heights to 3, angles to 2.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Document {
+    /// [`JSON_VERSION`] when written; the reader takes 2 to [`JSON_VERSION`].
+    pub version: u32,
+    /// One entry per input cloud, in input order.
+    pub files: Vec<DocumentFile>,
 }
 
-#[derive(Serialize)]
-struct JsonRun<'a> {
-    agent: &'a str,
-    height: f64,
-    hierarchy: &'a str,
-    hypotheses: usize,
-    fits: usize,
-    candidates: usize,
+/// One input cloud in the [`Document`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DocumentFile {
+    /// The input as named (a bag message as `file@time`).
+    pub file: String,
+    /// Points of the cloud.
+    pub points: usize,
+    /// Points dropped for non-finite coordinates.
+    pub dropped_non_finite: usize,
+    /// Affordance ids found by any detection, in hierarchy and node order.
+    pub affordances: Vec<String>,
+    /// Every model run on the file (a body with a hierarchy), in the order of the set.
+    pub runs: Vec<DocumentRun>,
+    /// Every detection of every run, run after run.
+    pub detections: Vec<DocumentDetection>,
 }
 
-#[derive(Serialize)]
-struct JsonFile<'a> {
-    file: &'a str,
-    points: usize,
-    dropped_non_finite: usize,
-    affordances: Vec<&'a str>,
-    runs: Vec<JsonRun<'a>>,
-    detections: Vec<JsonDetection<'a>>,
+/// One model's run in the [`Document`]: which body and hierarchy, and its stage counts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DocumentRun {
+    /// Agent name.
+    pub agent: String,
+    /// Body height, metres.
+    pub height: f64,
+    /// Hierarchy name.
+    pub hierarchy: String,
+    /// Hypotheses of the height map (section 4.1).
+    pub hypotheses: usize,
+    /// Stable fits (section 4.2).
+    pub fits: usize,
+    /// Unfolded candidates before suppression.
+    pub candidates: usize,
 }
 
-fn json_file(r: &FileReport) -> JsonFile<'_> {
-    JsonFile {
-        file: &r.file,
+/// One detection in the [`Document`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DocumentDetection {
+    /// Its number in the file (index into `detections`).
+    pub detection: usize,
+    /// Hierarchy name.
+    pub hierarchy: String,
+    /// Agent name.
+    pub agent: String,
+    /// Body height, metres.
+    pub height: f64,
+    /// The agent's root joint, world frame, metres.
+    pub position: [f64; 3],
+    /// Heading about world z, degrees; 0 faces +x.
+    pub yaw_deg: f64,
+    /// Affordance ids found, in node order.
+    pub affordances: Vec<String>,
+    /// Accumulated score (Eq. 5).
+    pub score: f64,
+    /// Stability of the fit (Eq. 1).
+    pub stability: f64,
+    /// Availability of the hypothesis (section 4.1).
+    pub availability: f64,
+    /// Local score of every visited node (Eq. 3-4), by id.
+    pub local_scores: BTreeMap<String, f64>,
+    /// The goal pose: every joint's angle, degrees, by joint name.
+    pub pose_deg: BTreeMap<String, f64>,
+    /// Every joint's origin in the goal pose, world frame, metres, by joint name (added in
+    /// version 3; empty when reading version 2).
+    #[serde(default)]
+    pub joints: BTreeMap<String, [f64; 3]>,
+    /// Points of the segment grown from the detection.
+    pub segment_points: usize,
+}
+
+/// The document entry of one report.
+fn document_file(r: &FileReport) -> DocumentFile {
+    DocumentFile {
+        file: r.file.clone(),
         points: r.points(),
         dropped_non_finite: r.dropped_non_finite,
-        affordances: affords(r, None).into_iter().map(String::as_str).collect(),
+        affordances: affords(r, None).into_iter().cloned().collect(),
         runs: r
             .runs
             .iter()
-            .map(|u| JsonRun {
-                agent: &u.agent,
+            .map(|u| DocumentRun {
+                agent: u.agent.clone(),
                 height: round(u.height, 3),
-                hierarchy: &u.hierarchy,
+                hierarchy: u.hierarchy.clone(),
                 hypotheses: u.stats.hypotheses,
                 fits: u.stats.fits,
                 candidates: u.stats.candidates,
@@ -171,47 +215,34 @@ fn json_file(r: &FileReport) -> JsonFile<'_> {
             .detections
             .iter()
             .enumerate()
-            .map(|(i, d)| json_detection(i, d))
+            .map(|(i, d)| document_detection(i, d))
             .collect(),
     }
 }
 
-fn json_detection(i: usize, d: &Detection) -> JsonDetection<'_> {
-    let num = |x: f64| serde_json::Value::from(round(x, 4));
-    JsonDetection {
+fn document_detection(i: usize, d: &Detection) -> DocumentDetection {
+    let named = |v: &[(String, f64)], decimals: i32| {
+        v.iter()
+            .map(|(k, x)| (k.clone(), round(*x, decimals)))
+            .collect()
+    };
+    DocumentDetection {
         detection: i,
-        hierarchy: &d.hierarchy,
-        agent: &d.agent,
+        hierarchy: d.hierarchy.clone(),
+        agent: d.agent.clone(),
         height: round(d.height, 3),
-        position: [
-            round(d.position.x, 4),
-            round(d.position.y, 4),
-            round(d.position.z, 4),
-        ],
+        position: [0, 1, 2].map(|k| round(d.position[k], 4)),
         yaw_deg: round(d.yaw.to_degrees(), 2),
-        affordances: &d.affordances,
+        affordances: d.affordances.clone(),
         score: round(d.score, 4),
         stability: round(d.stability, 4),
         availability: round(d.availability, 4),
-        local_scores: d
-            .local_scores
-            .iter()
-            .map(|(k, v)| (k.clone(), num(*v)))
-            .collect(),
-        pose_deg: d
-            .pose
-            .iter()
-            .map(|(k, v)| (k.clone(), serde_json::Value::from(round(*v, 2))))
-            .collect(),
+        local_scores: named(&d.local_scores, 4),
+        pose_deg: named(&d.pose, 2),
         joints: d
             .joints
             .iter()
-            .map(|(k, p)| {
-                (
-                    k.clone(),
-                    serde_json::json!([0, 1, 2].map(|i| round(p[i], 4))),
-                )
-            })
+            .map(|(k, p)| (k.clone(), [0, 1, 2].map(|i| round(p[i], 4))))
             .collect(),
         segment_points: d.segment_points,
     }
@@ -239,14 +270,9 @@ pub const JSON_VERSION: u32 = 3;
 /// entry per input file, each with its runs (body and hierarchy) and its detections (each
 /// naming its body, with its goal pose as angles and as joint positions).
 pub fn to_json(reports: &[FileReport]) -> String {
-    #[derive(Serialize)]
-    struct Doc<'a> {
-        version: u32,
-        files: Vec<JsonFile<'a>>,
-    }
-    let doc = Doc {
+    let doc = Document {
         version: JSON_VERSION,
-        files: reports.iter().map(json_file).collect(),
+        files: reports.iter().map(document_file).collect(),
     };
     let mut s = serde_json::to_string_pretty(&doc).unwrap_or_default();
     s.push('\n');
@@ -357,9 +383,4 @@ pub fn to_table(r: &FileReport) -> String {
         ));
     }
     s
-}
-
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    crate::atomic::write_bytes(path, bytes)
 }

@@ -12,44 +12,11 @@ use crate::extent::{guard, ExtentConfig, ExtentError};
 use crate::hierarchy::Hierarchy;
 use crate::input::{load_input, Input, InputOptions};
 use crate::model::ModelError;
-use crate::model_set::{load_set, sources, Model, Source, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
+use crate::model_set::{Model, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
 use crate::report::{self, FileReport};
+use crate::settings::Settings;
 
-/// Which models a command runs: bodies (agents at heights) and hierarchies, each named by
-/// file, folder or built-in name (see [`crate::model_set::sources`]).
-#[derive(Debug, Clone, Default)]
-pub struct ModelChoice {
-    /// Agents; empty for the built-in `human`.
-    pub agents: Vec<String>,
-    /// Hierarchies; empty for every built-in one (`sitting`, `lying`).
-    pub hierarchies: Vec<String>,
-    /// Body heights, metres; empty for 1.75 m.
-    pub heights: Vec<f64>,
-}
-
-/// The body height used when none is given, metres (an average adult).
-pub const DEFAULT_HEIGHT: f64 = 1.75;
-
-impl ModelChoice {
-    /// Resolves the agent and hierarchy names to their sources, with the defaults.
-    pub fn sources(&self) -> Result<(Vec<Source>, Vec<Source>), ModelError> {
-        let agents = sources(&self.agents, BUILTIN_AGENTS, &["human"])?;
-        let names: Vec<&str> = BUILTIN_HIERARCHIES.iter().map(|(n, _)| *n).collect();
-        let hierarchies = sources(&self.hierarchies, BUILTIN_HIERARCHIES, &names)?;
-        Ok((agents, hierarchies))
-    }
-
-    /// Resolves the names and loads every body with every hierarchy.
-    pub fn load(&self) -> Result<Vec<Model>, ModelError> {
-        let (agents, hierarchies) = self.sources()?;
-        let heights = if self.heights.is_empty() {
-            vec![DEFAULT_HEIGHT]
-        } else {
-            self.heights.clone()
-        };
-        load_set(&agents, &hierarchies, &heights)
-    }
-}
+pub use crate::settings::{ModelChoice, DEFAULT_HEIGHT};
 
 /// Everything `afford detect` was asked to do, validated.
 #[derive(Debug, Clone)]
@@ -66,8 +33,8 @@ pub struct DetectRequest {
     pub resume: bool,
     /// Write one JSON line per input on `out` ([`crate::batch::LogLine`]) instead of the table.
     pub log_json: bool,
-    /// Bodies and hierarchies.
-    pub models: ModelChoice,
+    /// Models, scene-level numbers and how inputs are read.
+    pub settings: Settings,
     /// JSON output.
     pub json: Option<PathBuf>,
     /// Detections CSV output.
@@ -81,10 +48,6 @@ pub struct DetectRequest {
     pub mesh: Option<PathBuf>,
     /// Put the cloud, coloured by segment, into a `.glb` mesh output too.
     pub mesh_scene: bool,
-    /// Scene-level numbers.
-    pub config: DetectConfig,
-    /// How inputs are read and brought into the world frame.
-    pub input: InputOptions,
     /// Show a progress bar on stderr when there are several inputs (the caller says
     /// whether stderr is a terminal and the user did not ask for quiet).
     pub progress: bool,
@@ -212,7 +175,7 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
         );
         return 2;
     }
-    let models = match req.models.load() {
+    let models = match req.settings.models.load() {
         Ok(m) => m,
         Err(e) => {
             let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
@@ -238,7 +201,8 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
         let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
         return 2;
     }
-    // The first error writing standard output (a full disk, a closed pipe): reported at the end.
+    // The first error writing standard output: a closed pipe (`| head`) stops the run
+    // quietly, any other (a full disk) is reported at the end.
     let mut out_error: Option<std::io::Error> = None;
     let bar = if req.progress && files.len() > 1 {
         let bar = indicatif::ProgressBar::new(files.len() as u64);
@@ -343,14 +307,18 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             out_error.get_or_insert(e);
         }
         bar.inc(1);
+        if out_error.as_ref().is_some_and(reader_gone) {
+            bar.finish_and_clear();
+            return if failed > 0 { 2 } else { 0 };
+        }
     }
     bar.finish_and_clear();
     let mut unwritten = 0usize;
     let mut write = |target: &Option<PathBuf>, text: Result<String, csv::Error>| {
         if let Some(p) = target {
-            let done = text
-                .map_err(|e| e.to_string())
-                .and_then(|t| report::write_atomic(p, t.as_bytes()).map_err(|e| e.to_string()));
+            let done = text.map_err(|e| e.to_string()).and_then(|t| {
+                crate::atomic::write_bytes(p, t.as_bytes()).map_err(|e| e.to_string())
+            });
             if let Err(e) = done {
                 let _ = writeln!(err, "error: {}: cannot write: {e}", p.display());
                 unwritten += 1;
@@ -391,14 +359,39 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
         let _ = writeln!(err, "{s}");
     }
     if let Some(e) = &out_error {
-        let _ = writeln!(err, "error: standard output: cannot write: {e}");
-        unwritten += 1;
+        unwritten += usize::from(stdout_failed(e, err) != 0);
     }
     if failed + unwritten > 0 {
         2
     } else {
         0
     }
+}
+
+/// Whether a write error means that the reader of the output went away (a closed pipe:
+/// `afford detect ... | head`): the run then stops without a message, as a filter does.
+pub fn reader_gone(e: &std::io::Error) -> bool {
+    e.kind() == std::io::ErrorKind::BrokenPipe
+}
+
+/// The exit code for an error writing standard output: 0 when the reader went away
+/// ([`reader_gone`]), otherwise 2 after one line on `err`.
+pub fn stdout_failed(e: &std::io::Error, err: &mut dyn Write) -> i32 {
+    if reader_gone(e) {
+        return 0;
+    }
+    // Standard error is where errors go; when it cannot be written either, the exit code
+    // is all that is left.
+    let _ = writeln!(err, "error: standard output: cannot write: {e}");
+    2
+}
+
+/// Writes `text` to standard output (`out`), flushed: `Ok` when written, otherwise the
+/// exit code of [`stdout_failed`].
+fn print(out: &mut dyn Write, err: &mut dyn Write, text: &str) -> Result<(), i32> {
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(|e| stdout_failed(&e, err))
 }
 
 /// Checks that the saved result `saved` (an `--out-dir` JSON) was made with the bodies and
@@ -412,20 +405,15 @@ fn check_saved_models(saved: &Path, models: &[Model]) -> Result<(), String> {
         .collect();
     let bad = |what: String| format!("{}: {what}", saved.display());
     let text = std::fs::read_to_string(saved).map_err(|e| bad(format!("cannot read: {e}")))?;
-    let doc: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| bad(format!("not a saved result: {e}")))?;
-    let runs = doc["files"][0]["runs"]
-        .as_array()
-        .ok_or_else(|| bad("not a saved result: no runs".into()))?;
-    let mut got: Vec<String> = runs
+    let doc = batch::read_document(&text, saved).map_err(|e| e.to_string())?;
+    let file = doc
+        .files
+        .first()
+        .ok_or_else(|| bad("not a saved result: no file".into()))?;
+    let mut got: Vec<String> = file
+        .runs
         .iter()
-        .map(|r| {
-            key(
-                r["agent"].as_str().unwrap_or("?"),
-                r["height"].as_f64().unwrap_or(f64::NAN),
-                r["hierarchy"].as_str().unwrap_or("?"),
-            )
-        })
+        .map(|r| key(&r.agent, r.height, &r.hierarchy))
         .collect();
     want.sort();
     got.sort();
@@ -509,7 +497,7 @@ fn detect_one(
         reports: Vec::new(),
         errors: Vec::new(),
     };
-    let read = crate::input::load_inputs(path, &req.input, &mut |input| match input {
+    let read = crate::input::load_inputs(path, &req.settings.input, &mut |input| match input {
         Ok(input) => detect_cloud(req, models, path, several, &input, &mut done, warn),
         Err(e) => done.errors.push(batch::printable(&e.to_string())),
     });
@@ -518,7 +506,7 @@ fn detect_one(
     }
     if let (Some(target), true) = (saved, done.errors.is_empty()) {
         let json = report::to_json(&done.reports);
-        if let Err(e) = report::write_atomic(target, json.as_bytes()) {
+        if let Err(e) = crate::atomic::write_bytes(target, json.as_bytes()) {
             done.errors.push(batch::printable(&format!(
                 "{}: cannot write: {e}",
                 target.display()
@@ -552,7 +540,7 @@ fn detect_cloud(
         &input.cloud,
         input.dropped_non_finite,
         models,
-        &req.config,
+        &req.settings.detect,
     ) {
         Ok(r) => r,
         Err(e) => {
@@ -624,28 +612,25 @@ fn notes(input: &Input, path: &Path, err: &mut dyn Write) {
 pub struct InspectRequest {
     /// The input cloud.
     pub file: PathBuf,
-    /// Bodies and hierarchies; the arrows are the hypotheses of the first model.
-    pub models: ModelChoice,
+    /// Models (the arrows are the hypotheses of the first), scene-level numbers and how
+    /// the input is read.
+    pub settings: Settings,
     /// The picture to write.
     pub png: PathBuf,
-    /// How the input is read and brought into the world frame.
-    pub input: InputOptions,
-    /// Scene-level numbers.
-    pub config: DetectConfig,
 }
 
 /// Runs `afford inspect`: detection on one file and a picture of the height map with the
 /// hypotheses of the first model and the detections of all (the paper's Fig. 4 b-d) beside
 /// views of the posed agents. Returns the exit code (0 done, 2 error).
 pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
-    let models = match req.models.load() {
+    let models = match req.settings.models.load() {
         Ok(m) => m,
         Err(e) => {
             let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
-    let loaded = match load_input(&req.file, &req.input) {
+    let loaded = match load_input(&req.file, &req.settings.input) {
         Ok(l) => l,
         Err(e) => {
             let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
@@ -656,7 +641,7 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
     let kept = match guard(
         &req.file,
         &loaded.cloud,
-        &req.config,
+        &req.settings.detect,
         &ExtentConfig::default(),
     ) {
         Ok(k) => k,
@@ -665,7 +650,7 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
             return 2;
         }
     };
-    let prepared = prepare(&kept.cloud, &req.config);
+    let prepared = prepare(&kept.cloud, &req.settings.detect);
     let hyps = models
         .first()
         .map(|m| {
@@ -678,7 +663,7 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
         })
         .unwrap_or_default();
     let outcomes =
-        crate::detect::detect_all_prepared(&loaded.cloud, &prepared, &models, &req.config);
+        crate::detect::detect_all_prepared(&loaded.cloud, &prepared, &models, &req.settings.detect);
     let stats = outcomes.first().map(|o| o.stats).unwrap_or_default();
     let r = FileReport::new(
         req.file.display().to_string(),
@@ -696,14 +681,13 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
         let _ = writeln!(err, "error: {}: cannot write: {e}", req.png.display());
         return 2;
     }
-    let _ = out.write_all(report::to_table(&r).as_bytes());
-    let _ = writeln!(
-        out,
-        "{} hypotheses drawn in {}",
+    let text = format!(
+        "{}{} hypotheses drawn in {}\n",
+        report::to_table(&r),
         hyps.len(),
         req.png.display()
     );
-    0
+    print(out, err, &text).err().unwrap_or(0)
 }
 
 /// Everything `afford synth` was asked to do.
@@ -739,13 +723,12 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
     if let Some(labels) = &req.models {
         return match dataset::views_of_labelled_models(labels, &req.out, req.seed, req.views) {
             Ok(s) => {
-                let _ = writeln!(
-                    out,
-                    "wrote {} views and {}",
+                let text = format!(
+                    "wrote {} views and {}\n",
                     s.rows.len(),
                     s.labels_csv.display()
                 );
-                0
+                print(out, err, &text).err().unwrap_or(0)
             }
             Err(e) => {
                 let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
@@ -758,8 +741,9 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
         for m in &req.meshes {
             match dataset::render_mesh_views(m, &req.out, req.seed, req.views) {
                 Ok(files) => {
-                    for f in files {
-                        let _ = writeln!(out, "{}", f.display());
+                    let text: String = files.iter().map(|f| format!("{}\n", f.display())).collect();
+                    if let Err(code) = print(out, err, &text) {
+                        return if failed > 0 { 2 } else { code };
                     }
                 }
                 Err(e) => {
@@ -794,20 +778,18 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
     }
     match dataset::generate(&req.out, req.seed, &spec) {
         Ok(s) => {
-            let _ = writeln!(
-                out,
-                "wrote {} scenes and {}",
+            let mut text = format!(
+                "wrote {} scenes and {}\n",
                 s.rows.len(),
                 s.labels_csv.display()
             );
             if req.camera_frame {
-                let _ = writeln!(
-                    out,
-                    "clouds are in their cameras' frames: afford eval {} --camera --floor auto",
+                text.push_str(&format!(
+                    "clouds are in their cameras' frames: afford eval {} --camera --floor auto\n",
                     s.labels_csv.display()
-                );
+                ));
             }
-            0
+            print(out, err, &text).err().unwrap_or(0)
         }
         Err(e) => {
             let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
@@ -821,18 +803,13 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
 pub struct EvalRequest {
     /// The labels file.
     pub labels: PathBuf,
-    /// Body heights, metres.
-    pub heights: Vec<f64>,
-    /// Agent (file or built-in name); `None` for the built-in `human`.
-    pub agent: Option<String>,
-    /// Hierarchies (files, folders or built-in names); empty for every built-in one.
-    pub affordances: Vec<String>,
+    /// Models (every body is scored), scene-level numbers and how the labelled files are
+    /// read.
+    pub settings: Settings,
     /// JSON output.
     pub json: Option<PathBuf>,
     /// CSV output.
     pub csv: Option<PathBuf>,
-    /// How the labelled files are read (units, frame, mesh sampling).
-    pub input: InputOptions,
     /// Score these saved detect outputs instead of running detection
     /// ([`crate::eval::evaluate_saved`]); empty to run detection.
     pub from: Vec<PathBuf>,
@@ -843,35 +820,10 @@ pub struct EvalRequest {
 /// Runs `afford eval`: prints the markdown table; returns the exit code (2 on error or
 /// when a file could not be read).
 pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
-    let choice = ModelChoice {
-        agents: req.agent.iter().cloned().collect(),
-        hierarchies: req.affordances.clone(),
-        heights: req.heights.clone(),
-    };
-    let (agents, hierarchies) = match choice.sources() {
-        Ok(s) => s,
-        Err(e) => {
-            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-            return 2;
-        }
-    };
     let ev = if req.from.is_empty() {
-        crate::eval::evaluate(
-            &req.labels,
-            &req.heights,
-            &agents[0],
-            &hierarchies,
-            &req.input,
-            !req.quiet,
-        )
+        crate::eval::evaluate(&req.labels, &req.settings, !req.quiet)
     } else {
-        crate::eval::evaluate_saved(
-            &req.labels,
-            &req.heights,
-            &agents[0],
-            &hierarchies,
-            &req.from,
-        )
+        crate::eval::evaluate_saved(&req.labels, &req.settings.models, &req.from)
     };
     let ev = match ev {
         Ok(ev) => ev,
@@ -880,11 +832,10 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
             return 2;
         }
     };
-    let _ = out.write_all(ev.markdown().as_bytes());
-    let mut code = 0;
+    let mut code = print(out, err, &ev.markdown()).err().unwrap_or(0);
     for (target, text) in [(&req.json, ev.to_json()), (&req.csv, ev.to_csv())] {
         if let Some(p) = target {
-            if let Err(e) = report::write_atomic(p, text.as_bytes()) {
+            if let Err(e) = crate::atomic::write_bytes(p, text.as_bytes()) {
                 let _ = writeln!(err, "error: {}: cannot write: {e}", p.display());
                 code = 2;
             }
@@ -976,13 +927,8 @@ pub fn run_convert(req: &ConvertRequest, out: &mut dyn Write, err: &mut dyn Writ
     };
     match written {
         Ok(()) => {
-            let _ = writeln!(
-                out,
-                "{}: {} points",
-                req.output.display(),
-                input.cloud.len()
-            );
-            0
+            let text = format!("{}: {} points\n", req.output.display(), input.cloud.len());
+            print(out, err, &text).err().unwrap_or(0)
         }
         Err(e) => {
             let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));

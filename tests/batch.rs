@@ -277,15 +277,13 @@ fn each_table_is_written_as_its_file_ends() {
         out_dir: None,
         resume: false,
         log_json: false,
-        models: Default::default(),
+        settings: Default::default(),
         json: None,
         csv: None,
         summary: None,
         segments: None,
         mesh: None,
         mesh_scene: false,
-        config: Default::default(),
-        input: Default::default(),
         progress: false,
     };
     let seq = Arc::new(Mutex::new(Vec::new()));

@@ -170,18 +170,18 @@ fn a_broken_custom_hierarchy_is_refused_with_file_line_and_key() {
     let dir = tempfile::tempdir().unwrap();
     let bad = PERCHING.replace(
         "theta1 = 60.0, theta2 = 140.0",
-        "theta1 = 140.0, theta2 = 60.0",
+        "theta1 = 60.0, theta2 = 170.0",
     );
     let path = write(&dir, &bad);
     let e = Hierarchy::load(&path, &agent).unwrap_err().to_string();
     let line = bad
         .lines()
-        .position(|l| l.contains("theta1 = 140.0"))
+        .position(|l| l.contains("theta2 = 170.0"))
         .unwrap()
         + 1;
     assert!(
         e.starts_with(&format!(
-            "{}:{line}: node.perching.sweep.knee_l.theta1: ",
+            "{}:{line}: node.perching.sweep.knee_l.theta2: joint `knee_l` at 170 deg is outside its limit 0.0 to 150.0 deg",
             path.display()
         )),
         "{e}"

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use afford::eval::evaluate;
-use afford::model_set::{Source, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
+use afford::settings::{ModelChoice, Settings};
 
 /// `(height in mm, affordance) -> F` of the main (non-doubtful) rows of an eval CSV.
 pub fn baseline(path: &Path) -> BTreeMap<(u32, String), f64> {
@@ -36,20 +36,16 @@ pub fn drops_below(
     base: &BTreeMap<(u32, String), f64>,
     heights: &[f64],
 ) -> Vec<String> {
-    let agent = Source::Builtin("human", BUILTIN_AGENTS[0].1);
-    let hierarchies: Vec<Source> = BUILTIN_HIERARCHIES
-        .iter()
-        .map(|(n, t)| Source::Builtin(n, t))
-        .collect();
-    let ev = evaluate(
-        labels,
-        heights,
-        &agent,
-        &hierarchies,
-        &Default::default(),
-        false,
+    let settings = Settings::new(
+        ModelChoice {
+            heights: heights.to_vec(),
+            ..Default::default()
+        },
+        None,
+        Default::default(),
     )
     .unwrap();
+    let ev = evaluate(labels, &settings, false).unwrap();
     assert!(ev.failed.is_empty(), "{:?}", ev.failed);
     let mut drops = Vec::new();
     for hr in &ev.heights {
