@@ -264,11 +264,15 @@ mod tests {
     #[test]
     fn grid_bytes_match_the_grids_built() {
         // 1 m x 1 m x 0 m: height map 21 x 21 cells (16 bytes of height and two 8-byte
-        // column offsets each); field box (50 + 2 + 30)^2 x (0 + 2 + 30) cells, in
-        // 3 x 3 x 1 chunks of 32^3 cells (a 24-byte slot each); a 2 m cube around a body
-        // spans (ceil(100 / 32) + 1)^3 = 5^3 chunks of 128 KiB.
+        // column offsets each); field box (50 + 2 + 30)^2 x (0 + 2 + 30) cells, computed
+        // at once (two f32 grids).
         let b = grid_bytes([1.0, 1.0, 0.0], &DetectConfig::default(), 2.0);
-        assert_eq!(b, 21.0 * 21.0 * 32.0 + 9.0 * 24.0 + 125.0 * 131072.0);
+        assert_eq!(b, 21.0 * 21.0 * 32.0 + 82.0 * 82.0 * 32.0 * 8.0);
+        // 40 m x 40 m x 0 m: field box 2032^2 x 32 cells, over the dense limit: 64^2
+        // chunks of 32^3 cells (a 24-byte slot each); a 2 m cube around a body spans
+        // (ceil(100 / 32) + 1)^3 = 5^3 chunks of 128 KiB.
+        let b = grid_bytes([40.0, 40.0, 0.0], &DetectConfig::default(), 2.0);
+        assert_eq!(b, 801.0 * 801.0 * 32.0 + 4096.0 * 24.0 + 125.0 * 131072.0);
         // A 200 m x 200 m floor no longer counts its whole box of voxels (4e9 cells).
         let floor = grid_bytes([200.0, 200.0, 1.0], &DetectConfig::default(), 2.0);
         assert!(floor < 0.6 * GIB, "{}", floor / GIB);

@@ -47,16 +47,20 @@ pub struct Scene {
 
 /// Bytes the distance field of a scene spanning `extent` (metres along x, y, z, the
 /// occupied voxels' span) takes at most while a body moves within a cube of edge `reach`
-/// metres: one chunk slot per chunk of the field's box, and the chunks covering that cube
-/// (an upper bound, in f64 so any extent gives a number). Chunks beyond the cube are
+/// metres: a box of at most [`DENSE_CELLS`] is computed at once; a larger one takes one
+/// chunk slot per chunk of its box and the chunks covering that cube (an upper bound, in
+/// f64 so any extent gives a number). Chunks beyond the cube are
 /// computed only where bodies elsewhere ask for them (at most [`KEPT_CHUNKS`] kept).
 pub fn field_bytes(extent: [f64; 3], cfg: &SceneConfig, reach: f64) -> f64 {
     let v = cfg.voxel_size;
     let margin = 2.0 * (cfg.field_margin / v).ceil();
-    let chunks: f64 = extent
-        .iter()
-        .map(|e| (((e / v).floor() + 2.0 + margin) / CHUNK as f64).ceil())
-        .product();
+    let dims = extent.map(|e| (e / v).floor() + 2.0 + margin);
+    let cells: f64 = dims.iter().product();
+    if cells <= DENSE_CELLS as f64 {
+        // Computed at once: two f32 grids while the transform runs.
+        return cells * 2.0 * std::mem::size_of::<f32>() as f64;
+    }
+    let chunks: f64 = dims.iter().map(|d| (d / CHUNK as f64).ceil()).product();
     let around = ((reach / v / CHUNK as f64).ceil() + 1.0).powi(3);
     let chunk_bytes = (CHUNK_CELLS * std::mem::size_of::<f32>()) as f64;
     chunks * std::mem::size_of::<OnceLock<Box<[f32]>>>() as f64 + around * chunk_bytes
@@ -494,14 +498,20 @@ fn floor_gap(c: &Cylinder) -> f64 {
 const CHUNK: usize = 32;
 /// Cells cut per chunk (`CHUNK`^3).
 const CHUNK_CELLS: usize = CHUNK * CHUNK * CHUNK;
-/// Border (cells) first read around a chunk when its distances are computed: half a chunk,
-/// so cells within 0.34 m of a surface (where the agent's parts move) are decided in one
-/// pass; farther cells are recomputed with a border [`PAD_GROWTH`] times wider.
-const FIRST_PAD: usize = CHUNK / 2;
-/// Growth of the border when a pass leaves cells undecided.
+/// Border (cells) first read around a chunk when its distances are computed: a quarter
+/// chunk, so cells within 0.18 m of a surface (where contacts are found) are decided in
+/// one cheap pass; a chunk with farther cells is computed again with a border as wide as
+/// the farthest distance found.
+const FIRST_PAD: usize = CHUNK / 4;
+/// Growth of the border when a pass finds no occupied cell for some cell.
 const PAD_GROWTH: usize = 4;
 /// Squared distance (cells) standing for "no occupied cell in reach" in the passes.
 const FAR: f32 = 1e20;
+/// Largest field box (cells) whose distances are computed at once, densely (8 bytes a cell
+/// while computed, 4 kept): 2^25 cells, 256 MiB, a 1M-point room scan at 2 cm; there one
+/// pass over the box costs about a third of the instructions of computing its chunks with
+/// their borders. Larger boxes are computed in chunks where they are used.
+const DENSE_CELLS: usize = 1 << 25;
 /// Most chunks kept at once: 512 MiB of distances. A 1M-point room scan at 2 cm touches
 /// about a fifth of that; past it, distances are computed cell by cell and not kept, so
 /// memory stays bounded and only time grows (the values are the same).
@@ -533,12 +543,30 @@ struct DistanceField {
     chunks: Vec<OnceLock<Box<[f32]>>>,
     /// Chunks computed and kept so far.
     kept: AtomicUsize,
+    /// The distances (metres) of a box of at most [`DENSE_CELLS`], all computed at once,
+    /// laid out `(y * nz + z) * nx + x`; `None` for a larger box (then `chunks` holds them).
+    dense: Option<Vec<f32>>,
 }
 
 impl DistanceField {
     /// The field over the box `min .. min + dims` of the occupied voxel `keys` (all inside
     /// the box), voxel edge `v` metres. Nothing is computed yet.
     fn new(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]], v: f64) -> DistanceField {
+        Self::with_dense_limit(min, dims, keys, v, DENSE_CELLS)
+    }
+
+    /// [`Self::new`], computing the box at once when it has at most `dense_cells` cells.
+    fn with_dense_limit(
+        min: [i64; 3],
+        dims: [usize; 3],
+        keys: &[[i64; 3]],
+        v: f64,
+        dense_cells: usize,
+    ) -> DistanceField {
+        let cells = dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
+        let dense = cells
+            .is_some_and(|n| n <= dense_cells)
+            .then(|| dense::dense_distances(min, dims, keys, v));
         let ny = dims[1] as u64;
         let mut cells: Vec<(u64, u32)> = keys
             .iter()
@@ -559,9 +587,12 @@ impl DistanceField {
         }
         row_start.push(xs.len());
         let chunk_dims = dims.map(|d| d.div_ceil(CHUNK));
-        let chunks = (0..chunk_dims.iter().product())
-            .map(|_| OnceLock::new())
-            .collect();
+        let slots = if dense.is_some() {
+            0
+        } else {
+            chunk_dims.iter().product()
+        };
+        let chunks = (0..slots).map(|_| OnceLock::new()).collect();
         DistanceField {
             min,
             dims,
@@ -572,6 +603,7 @@ impl DistanceField {
             chunk_dims,
             chunks,
             kept: AtomicUsize::new(0),
+            dense,
         }
     }
 
@@ -592,6 +624,10 @@ impl DistanceField {
     /// `None` outside the box.
     fn get(&self, k: [i64; 3]) -> Option<f32> {
         let o = self.offsets(k)?;
+        if let Some(d) = &self.dense {
+            let [nx, _, nz] = self.dims;
+            return Some(d[(o[1] * nz + o[2]) * nx + o[0]]);
+        }
         let c = o.map(|i| i / CHUNK);
         let [cnx, cny, _] = self.chunk_dims;
         let slot = &self.chunks[(c[2] * cny + c[1]) * cnx + c[0]];
@@ -652,7 +688,11 @@ impl DistanceField {
                     (best as f32).sqrt() * self.voxel
                 };
             }
-            pad *= PAD_GROWTH;
+            pad = if best == u64::MAX {
+                pad * PAD_GROWTH
+            } else {
+                ((best as f64).sqrt().ceil() as usize).max(pad + 1)
+            };
         }
     }
 
@@ -740,25 +780,32 @@ impl DistanceField {
                     if f[..py].iter().all(|&d| d == FAR) {
                         continue;
                     }
-                    edt_1d(&f[..py], &mut out[..py], &mut vs, &mut zs);
+                    edt_1d_range(&f[..py], start[1] - y0, &mut out[..cy], &mut vs, &mut zs);
                     for y in 0..cy {
-                        g2[(z * cy + y) * cx + x] = out[start[1] - y0 + y];
+                        g2[(z * cy + y) * cx + x] = out[y];
                     }
                 }
             }
             // Along z, kept only for the chunk's cells.
             let mut dist = vec![f32::INFINITY; CHUNK_CELLS].into_boxed_slice();
             let reach = ((pad + 1) * (pad + 1)) as f32;
-            let mut decided = true;
+            // The largest squared distance found that is not certain yet.
+            let mut undecided = 0f32;
             for y in 0..cy {
                 for x in 0..cx {
                     for z in 0..pz {
                         f[z] = g2[(z * cy + y) * cx + x];
                     }
-                    edt_1d(&f[..pz], &mut out[..pz], &mut vs, &mut zs);
+                    if f[..pz].iter().all(|&d| d == FAR) {
+                        undecided = FAR;
+                        continue;
+                    }
+                    edt_1d_range(&f[..pz], start[2] - z0, &mut out[..cz], &mut vs, &mut zs);
                     for z in 0..cz {
-                        let q = out[start[2] - z0 + z];
-                        decided &= whole || q <= reach;
+                        let q = out[z];
+                        if !whole && q > reach {
+                            undecided = undecided.max(q);
+                        }
                         dist[(z * CHUNK + y) * CHUNK + x] = if q >= FAR / 2.0 {
                             f32::INFINITY
                         } else {
@@ -767,10 +814,17 @@ impl DistanceField {
                     }
                 }
             }
-            if decided {
+            if whole || undecided == 0.0 {
                 return dist;
             }
-            pad *= PAD_GROWTH;
+            // A border as wide as the farthest distance found holds every nearest
+            // occupied cell (the distances can only shrink as it widens); with none found,
+            // the border grows by a factor.
+            pad = if undecided < FAR / 2.0 {
+                (undecided.sqrt().ceil() as usize).max(pad + 1)
+            } else {
+                pad * PAD_GROWTH
+            };
         }
     }
 }
@@ -798,6 +852,12 @@ fn nearest_in_list(xs: &[u32], start: usize, out: &mut [f32]) {
 
 /// One-dimensional squared distance transform of sampled function `f` (lower envelope of parabolas).
 fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
+    edt_1d_range(f, 0, d, v, z);
+}
+
+/// [`edt_1d`] written only for the positions `from .. from + d.len()` of `f` (the same
+/// values, bit for bit).
+fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
     let n = f.len();
     let mut k = 0usize;
     v[0] = 0;
@@ -826,7 +886,8 @@ fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
         }
     }
     k = 0;
-    for (q, dq) in d.iter_mut().enumerate().take(n) {
+    for (q, dq) in d.iter_mut().enumerate().take(n - from.min(n)) {
+        let q = q + from;
         while z[k + 1] < q as f32 {
             k += 1;
         }
@@ -836,10 +897,10 @@ fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
     }
 }
 
-#[cfg(test)]
-mod reference {
-    //! The dense exact transform over the whole box (the field before it was computed in
-    //! chunks), kept as the reference the chunked field must equal bit for bit.
+mod dense {
+    //! The dense exact transform over the whole box, for boxes small enough to hold at
+    //! once ([`DENSE_CELLS`]): faster than chunks there; the chunked field equals it bit
+    //! for bit.
     use super::*;
 
     /// Exact Euclidean distance transform (Felzenszwalb and Huttenlocher, 2012) of the
@@ -948,7 +1009,7 @@ mod reference {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use reference::*;
+    use dense::*;
 
     fn cfg(floor: bool) -> SceneConfig {
         SceneConfig {
@@ -1035,7 +1096,10 @@ mod tests {
                 .map(|k| [k[0] + min[0], k[1] + min[1], k[2] + min[2]])
                 .collect();
             let want = dense_distances(min, dims, &keys, 0.02);
-            let field = DistanceField::new(min, dims, &keys, 0.02);
+            let field = DistanceField::with_dense_limit(min, dims, &keys, 0.02, 0);
+            assert!(field.dense.is_none());
+            let whole = DistanceField::new(min, dims, &keys, 0.02);
+            assert_eq!(whole.dense.as_deref(), Some(&want[..]));
             let [nx, ny, nz] = dims;
             for y in 0..ny {
                 for z in 0..nz {
