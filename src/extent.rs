@@ -1,7 +1,8 @@
-//! The guard stage before the grids: the height map (section 4.1) and the voxel distance
-//! field (section 4.2) are dense over the cloud's extent, so their memory follows the
-//! bounding box, not the points. This stage makes the extent the detector sees follow the
-//! points:
+//! The guard stage before the grids: the height map (section 4.1) is dense over the
+//! cloud's extent in x and y, and the voxel distance field (section 4.2) keeps one slot
+//! per 32^3 cells of its box (its distances are computed only where a body asks for them),
+//! so part of their memory follows the bounding box, not the points. This stage makes the
+//! extent the detector sees follow the points:
 //!
 //! 1. every coordinate must be finite and within [`ExtentConfig::max_coordinate`] (beyond,
 //!    f64 cannot resolve the 5 mm contact steps and grid indices overflow);
@@ -33,8 +34,11 @@ pub struct ExtentConfig {
     pub stray_share: f64,
     /// Largest accepted |coordinate|, metres.
     pub max_coordinate: f64,
-    /// Most bytes the dense grids (height map and distance field) of one file may take.
+    /// Most bytes the grids (height map, distance field) of one file may take.
     pub grid_budget: u64,
+    /// Edge of the cube around a body whose distance-field chunks must fit the budget
+    /// together, metres.
+    pub reach: f64,
 }
 
 impl Default for ExtentConfig {
@@ -48,6 +52,8 @@ impl Default for ExtentConfig {
             max_coordinate: 1e7,
             // 2 GiB: a 25 m x 25 m x 3 m scene at 2 cm voxels fits; half of a small 4 GB machine.
             grid_budget: 2 << 30,
+            // 2 m: a 1.85 m adult lying, or sitting with the legs stretched, fits in it.
+            reach: 2.0,
         }
     }
 }
@@ -58,8 +64,6 @@ const GIB: f64 = (1u64 << 30) as f64;
 /// of the per-cell sort (`heightmap::HeightMap::from_cloud`).
 const HEIGHTMAP_CELL_BYTES: f64 =
     (std::mem::size_of::<Option<f64>>() + 2 * std::mem::size_of::<usize>()) as f64;
-/// Bytes per distance-field cell: two `f32` grids (the transform's input and output).
-const FIELD_CELL_BYTES: f64 = 8.0;
 
 /// Why a cloud is refused before the grids are built. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
@@ -148,7 +152,7 @@ pub fn guard<'a>(
     };
     if let Some((lo, hi)) = kept.bounds() {
         let extent = [hi.x - lo.x, hi.y - lo.y, hi.z - lo.z];
-        let need = grid_bytes(extent, detect);
+        let need = grid_bytes(extent, detect, cfg.reach);
         if need > cfg.grid_budget as f64 {
             return Err(ExtentError::TooLarge {
                 path: path.to_path_buf(),
@@ -165,18 +169,13 @@ pub fn guard<'a>(
     })
 }
 
-/// Bytes the height map and the distance field take over an extent (metres along x, y, z),
+/// Bytes the height map and the distance field take over an extent (metres along x, y, z)
+/// while a body moves within a cube of edge `reach` metres ([`crate::scene::field_bytes`]),
 /// as an upper bound (computed in f64, so any extent gives a number).
-pub fn grid_bytes(extent: [f64; 3], cfg: &DetectConfig) -> f64 {
+pub fn grid_bytes(extent: [f64; 3], cfg: &DetectConfig, reach: f64) -> f64 {
     let hc = cfg.heightmap.cell;
     let map = (extent[0] / hc + 1.0).floor() * (extent[1] / hc + 1.0).floor();
-    let v = cfg.scene.voxel_size;
-    let margin = 2.0 * (cfg.scene.field_margin / v).ceil();
-    let field: f64 = extent
-        .iter()
-        .map(|e| (e / v).floor() + 2.0 + margin)
-        .product();
-    map * HEIGHTMAP_CELL_BYTES + field * FIELD_CELL_BYTES
+    map * HEIGHTMAP_CELL_BYTES + crate::scene::field_bytes(extent, &cfg.scene, reach)
 }
 
 /// Per point, whether it lies in a connected region of coarse cubes (edge `cell`, touching
@@ -265,8 +264,21 @@ mod tests {
     #[test]
     fn grid_bytes_match_the_grids_built() {
         // 1 m x 1 m x 0 m: height map 21 x 21 cells (16 bytes of height and two 8-byte
-        // column offsets each), field (50 + 2 + 30)^2 x (0 + 2 + 30).
-        let b = grid_bytes([1.0, 1.0, 0.0], &DetectConfig::default());
+        // column offsets each); field box (50 + 2 + 30)^2 x (0 + 2 + 30) cells, computed
+        // at once (two f32 grids).
+        let b = grid_bytes([1.0, 1.0, 0.0], &DetectConfig::default(), 2.0);
         assert_eq!(b, 21.0 * 21.0 * 32.0 + 82.0 * 82.0 * 32.0 * 8.0);
+        // 40 m x 40 m x 0 m: field box 2032^2 x 32 cells, over the dense limit: 64^2
+        // chunks of 32^3 cells (a 24-byte slot each); a 2 m cube around a body spans
+        // (ceil(100 / 32) + 1)^3 = 5^3 chunks of 128 KiB.
+        let b = grid_bytes([40.0, 40.0, 0.0], &DetectConfig::default(), 2.0);
+        assert_eq!(b, 801.0 * 801.0 * 32.0 + 4096.0 * 24.0 + 125.0 * 131072.0);
+        // A 200 m x 200 m floor no longer counts its whole box of voxels (4e9 cells).
+        let floor = grid_bytes([200.0, 200.0, 1.0], &DetectConfig::default(), 2.0);
+        assert!(floor < 0.6 * GIB, "{}", floor / GIB);
+        // A 2 mm voxel makes the cube around one body alone 4 GiB.
+        let mut fine = DetectConfig::default();
+        fine.scene.voxel_size = 0.002;
+        assert!(grid_bytes([1.0, 1.0, 0.0], &fine, 2.0) > 4.0 * GIB);
     }
 }

@@ -4,7 +4,14 @@
 //! made where contact is near), and the floor, the half-space z <= 0 (paper section 3.1:
 //! agent and scene share the ground plane).
 //!
+//! Memory follows the points and the region the agent reaches, not the bounding box: the
+//! occupied voxels are kept as sorted rows, and the distance field is computed exactly but
+//! lazily, chunk by chunk, where a body part first asks for it.
+//!
 //! World frame: metres, z up. Parry works in f32 in a local frame re-centred on the cloud.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::OnceLock;
 
 use nalgebra::{Point3, Vector3};
 use parry3d::math::{IVector, Pose, Rotation, Vector};
@@ -38,13 +45,25 @@ pub struct Scene {
     count: usize,
 }
 
-/// Euclidean distances from cell centres to the nearest occupied voxel centre.
-#[derive(Debug)]
-struct DistanceField {
-    /// Grid index of cell (0, 0, 0).
-    min: [i64; 3],
-    dims: [usize; 3],
-    dist: Vec<f32>,
+/// Bytes the distance field of a scene spanning `extent` (metres along x, y, z, the
+/// occupied voxels' span) takes at most while a body moves within a cube of edge `reach`
+/// metres: a box of at most [`DENSE_CELLS`] is computed at once; a larger one takes one
+/// chunk slot per chunk of its box and the chunks covering that cube (an upper bound, in
+/// f64 so any extent gives a number). Chunks beyond the cube are
+/// computed only where bodies elsewhere ask for them (at most [`KEPT_CHUNKS`] kept).
+pub fn field_bytes(extent: [f64; 3], cfg: &SceneConfig, reach: f64) -> f64 {
+    let v = cfg.voxel_size;
+    let margin = 2.0 * (cfg.field_margin / v).ceil();
+    let dims = extent.map(|e| (e / v).floor() + 2.0 + margin);
+    let cells: f64 = dims.iter().product();
+    if cells <= DENSE_CELLS as f64 {
+        // Computed at once: two f32 grids while the transform runs.
+        return cells * 2.0 * std::mem::size_of::<f32>() as f64;
+    }
+    let chunks: f64 = dims.iter().map(|d| (d / CHUNK as f64).ceil()).product();
+    let around = ((reach / v / CHUNK as f64).ceil() + 1.0).powi(3);
+    let chunk_bytes = (CHUNK_CELLS * std::mem::size_of::<f32>()) as f64;
+    chunks * std::mem::size_of::<OnceLock<Box<[f32]>>>() as f64 + around * chunk_bytes
 }
 
 impl Scene {
@@ -165,8 +184,8 @@ impl Scene {
     ///
     /// The answer is parry3d's `intersection_test` of a cylinder against the `Voxels`
     /// shape, which tests every occupied voxel in the cylinder's bounding box with GJK.
-    /// The same voxels are visited here (found through the distance field, which skips
-    /// runs of free cells), but voxels whose centre lies deep inside the cylinder, or
+    /// The same voxels are visited here (found in the sorted rows of occupied cells), but
+    /// voxels whose centre lies deep inside the cylinder, or
     /// whose bounding sphere is clear of the cylinder's capsule, are decided by
     /// geometry with a margin of [`DECIDE_MARGIN`]; only the voxels between are handed
     /// to parry's GJK, with the poses parry itself would use.
@@ -189,7 +208,7 @@ impl Scene {
             let inner = len - 2.0 * DECIDE_MARGIN;
             for i in 0..=n {
                 let p = c.a + axis * ((DECIDE_MARGIN + inner * i as f64 / n as f64) / len);
-                if field.get(cell_of(&((p.coords - self.origin) / self.voxel))) == Some(0.0) {
+                if field.occupied(cell_of(&((p.coords - self.origin) / self.voxel))) {
                     return true;
                 }
             }
@@ -235,14 +254,8 @@ impl Scene {
                 Side::Boundary
             }
         };
-        // The box is walked in lines along the grid axis nearest to the cylinder's (the
-        // fewest lines for a long part), skipping free runs by their distance.
-        let a = (0..3)
-            .max_by(|&i, &j| u[i].abs().total_cmp(&u[j].abs()))
-            .unwrap_or(0);
-        let axes = [a, (a + 1) % 3, (a + 2) % 3];
         let cuboid = parry3d::shape::Cuboid::new(size / 2.0);
-        field.any_occupied(lo, hi, axes, self.voxel, |k| match classify(k) {
+        field.any_occupied(lo, hi, |k| match classify(k) {
             Side::Inside => true,
             Side::Clear => false,
             Side::Boundary => {
@@ -479,14 +492,428 @@ fn floor_gap(c: &Cylinder) -> f64 {
     c.a.z.min(c.b.z) - c.radius * sin
 }
 
+/// Edge of a distance-field chunk, cells: the unit in which distances are computed and
+/// kept. 32 cells (0.64 m at 2 cm) hold a seat or a limb's neighbourhood, so a fit reuses
+/// a few chunks; a chunk is 128 KiB of `f32`.
+const CHUNK: usize = 32;
+/// Cells cut per chunk (`CHUNK`^3).
+const CHUNK_CELLS: usize = CHUNK * CHUNK * CHUNK;
+/// Border (cells) first read around a chunk when its distances are computed: a quarter
+/// chunk, so cells within 0.18 m of a surface (where contacts are found) are decided in
+/// one cheap pass; a chunk with farther cells is computed again with a border as wide as
+/// the farthest distance found.
+const FIRST_PAD: usize = CHUNK / 4;
+/// Growth of the border when a pass finds no occupied cell for some cell.
+const PAD_GROWTH: usize = 4;
+/// Squared distance (cells) standing for "no occupied cell in reach" in the passes.
+const FAR: f32 = 1e20;
+/// Largest field box (cells) whose distances are computed at once, densely (8 bytes a cell
+/// while computed, 4 kept): 2^25 cells, 256 MiB, a 1M-point room scan at 2 cm; there one
+/// pass over the box costs about a third of the instructions of computing its chunks with
+/// their borders. Larger boxes are computed in chunks where they are used.
+const DENSE_CELLS: usize = 1 << 25;
+/// Most chunks kept at once: 512 MiB of distances. A 1M-point room scan at 2 cm touches
+/// about a fifth of that; past it, distances are computed cell by cell and not kept, so
+/// memory stays bounded and only time grows (the values are the same).
+const KEPT_CHUNKS: usize = (512 << 20) / (CHUNK_CELLS * std::mem::size_of::<f32>());
+
+/// Euclidean distances from cell centres to the nearest occupied voxel centre, over the
+/// box `min .. min + dims` (grid keys), computed lazily in chunks of [`CHUNK`]^3 cells:
+/// only the chunks queried are ever computed or stored, so memory follows the region the
+/// agent reaches, not the box. Each value is exact (the same `f32` a dense exact
+/// transform over the whole box gives: the square root of an integer squared distance in
+/// cells, times the voxel size); the occupied cells are kept as sorted rows along x.
+#[derive(Debug)]
+struct DistanceField {
+    /// Grid key of cell (0, 0, 0).
+    min: [i64; 3],
+    dims: [usize; 3],
+    /// Voxel edge, metres, in the precision of the stored distances.
+    voxel: f32,
+    /// Ids (`z * ny + y`) of the rows along x holding occupied cells, ascending.
+    rows: Vec<u64>,
+    /// Start of each row's cells in `xs` (one more entry than `rows`).
+    row_start: Vec<usize>,
+    /// x offsets of the occupied cells, ascending within each row.
+    xs: Vec<u32>,
+    /// Chunks per axis.
+    chunk_dims: [usize; 3],
+    /// Distances (metres), chunk by chunk (`(cz * cny + cy) * cnx + cx`), each laid out
+    /// `(z * CHUNK + y) * CHUNK + x`; computed on first use.
+    chunks: Vec<OnceLock<Box<[f32]>>>,
+    /// Chunks computed and kept so far.
+    kept: AtomicUsize,
+    /// The distances (metres) of a box of at most [`DENSE_CELLS`], all computed at once,
+    /// laid out `(y * nz + z) * nx + x`; `None` for a larger box (then `chunks` holds them).
+    dense: Option<Vec<f32>>,
+}
+
 impl DistanceField {
+    /// The field over the box `min .. min + dims` of the occupied voxel `keys` (all inside
+    /// the box), voxel edge `v` metres. Nothing is computed yet.
+    fn new(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]], v: f64) -> DistanceField {
+        Self::with_dense_limit(min, dims, keys, v, DENSE_CELLS)
+    }
+
+    /// [`Self::new`], computing the box at once when it has at most `dense_cells` cells.
+    fn with_dense_limit(
+        min: [i64; 3],
+        dims: [usize; 3],
+        keys: &[[i64; 3]],
+        v: f64,
+        dense_cells: usize,
+    ) -> DistanceField {
+        let cells = dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
+        let dense = cells
+            .is_some_and(|n| n <= dense_cells)
+            .then(|| dense::dense_distances(min, dims, keys, v));
+        let ny = dims[1] as u64;
+        let mut cells: Vec<(u64, u32)> = keys
+            .iter()
+            .map(|k| {
+                let o = [0, 1, 2].map(|a| (k[a] - min[a]) as u64);
+                (o[2] * ny + o[1], o[0] as u32)
+            })
+            .collect();
+        cells.sort_unstable();
+        cells.dedup();
+        let (mut rows, mut row_start, mut xs) = (Vec::new(), Vec::new(), Vec::new());
+        for (i, &(row, x)) in cells.iter().enumerate() {
+            if rows.last() != Some(&row) {
+                rows.push(row);
+                row_start.push(i);
+            }
+            xs.push(x);
+        }
+        row_start.push(xs.len());
+        let chunk_dims = dims.map(|d| d.div_ceil(CHUNK));
+        let slots = if dense.is_some() {
+            0
+        } else {
+            chunk_dims.iter().product()
+        };
+        let chunks = (0..slots).map(|_| OnceLock::new()).collect();
+        DistanceField {
+            min,
+            dims,
+            voxel: v as f32,
+            rows,
+            row_start,
+            xs,
+            chunk_dims,
+            chunks,
+            kept: AtomicUsize::new(0),
+            dense,
+        }
+    }
+
+    /// Offsets of grid key `k` in the box, or `None` outside it.
+    fn offsets(&self, k: [i64; 3]) -> Option<[usize; 3]> {
+        let mut o = [0usize; 3];
+        for a in 0..3 {
+            let i = k[a] - self.min[a];
+            if i < 0 || i as usize >= self.dims[a] {
+                return None;
+            }
+            o[a] = i as usize;
+        }
+        Some(o)
+    }
+
+    /// Distance (metres) from the centre of cell `k` to the nearest occupied cell centre;
+    /// `None` outside the box.
+    fn get(&self, k: [i64; 3]) -> Option<f32> {
+        let o = self.offsets(k)?;
+        if let Some(d) = &self.dense {
+            let [nx, _, nz] = self.dims;
+            return Some(d[(o[1] * nz + o[2]) * nx + o[0]]);
+        }
+        let c = o.map(|i| i / CHUNK);
+        let [cnx, cny, _] = self.chunk_dims;
+        let slot = &self.chunks[(c[2] * cny + c[1]) * cnx + c[0]];
+        let l = o.map(|i| i % CHUNK);
+        let at = (l[2] * CHUNK + l[1]) * CHUNK + l[0];
+        if let Some(chunk) = slot.get() {
+            return Some(chunk[at]);
+        }
+        if self.kept.load(Ordering::Relaxed) >= KEPT_CHUNKS {
+            return Some(self.cell_distance(o));
+        }
+        let chunk = slot.get_or_init(|| {
+            self.kept.fetch_add(1, Ordering::Relaxed);
+            self.compute_chunk(c.map(|i| i * CHUNK))
+        });
+        Some(chunk[at])
+    }
+
+    /// The rows `(y, z)` with occupied cells for `y` in `y0..y1` at height `z`, as
+    /// `(y, x offsets)`.
+    fn rows_at(&self, z: usize, y0: usize, y1: usize) -> impl Iterator<Item = (usize, &[u32])> {
+        let base = (z * self.dims[1]) as u64;
+        let r = self.rows.partition_point(|&id| id < base + y0 as u64);
+        self.rows[r..]
+            .iter()
+            .take_while(move |&&id| id < base + y1 as u64)
+            .enumerate()
+            .map(move |(i, &id)| {
+                let (a, b) = (self.row_start[r + i], self.row_start[r + i + 1]);
+                ((id - base) as usize, &self.xs[a..b])
+            })
+    }
+
+    /// The distance of the one cell at offsets `o`, computed alone (as [`Self::get`] gives
+    /// it, for distances under 2^12 cells, where the squared distances are exact in f32):
+    /// the nearest occupied cell of each row within a border that grows as in
+    /// [`Self::compute_chunk`].
+    fn cell_distance(&self, o: [usize; 3]) -> f32 {
+        let [_, ny, nz] = self.dims;
+        let mut pad = FIRST_PAD;
+        loop {
+            let (y0, y1) = (o[1].saturating_sub(pad), (o[1] + 1 + pad).min(ny));
+            let (z0, z1) = (o[2].saturating_sub(pad), (o[2] + 1 + pad).min(nz));
+            let mut best = u64::MAX;
+            for z in z0..z1 {
+                for (y, xs) in self.rows_at(z, y0, y1) {
+                    let mut d = [0f32];
+                    nearest_in_list(xs, o[0], &mut d);
+                    let (dy, dz) = (y.abs_diff(o[1]) as u64, z.abs_diff(o[2]) as u64);
+                    best = best.min(d[0] as u64 + dy * dy + dz * dz);
+                }
+            }
+            let whole = y0 == 0 && y1 == ny && z0 == 0 && z1 == nz;
+            if whole || best <= ((pad + 1) * (pad + 1)) as u64 {
+                return if best == u64::MAX {
+                    f32::INFINITY
+                } else {
+                    (best as f32).sqrt() * self.voxel
+                };
+            }
+            pad = if best == u64::MAX {
+                pad * PAD_GROWTH
+            } else {
+                ((best as f64).sqrt().ceil() as usize).max(pad + 1)
+            };
+        }
+    }
+
+    /// The occupied x offsets of row `(y, z)` (offsets in the box).
+    fn row(&self, y: usize, z: usize) -> &[u32] {
+        let id = (z * self.dims[1] + y) as u64;
+        match self.rows.binary_search(&id) {
+            Ok(r) => &self.xs[self.row_start[r]..self.row_start[r + 1]],
+            Err(_) => &[],
+        }
+    }
+
+    /// Whether cell `k` is occupied.
+    fn occupied(&self, k: [i64; 3]) -> bool {
+        self.offsets(k)
+            .is_some_and(|o| self.row(o[1], o[2]).binary_search(&(o[0] as u32)).is_ok())
+    }
+
+    /// Calls `visit` on the occupied cells with keys in the half-open box `lo..hi` until it
+    /// returns true; returns whether it did.
+    fn any_occupied(
+        &self,
+        lo: [i64; 3],
+        hi: [i64; 3],
+        mut visit: impl FnMut([i64; 3]) -> bool,
+    ) -> bool {
+        let lo = [0, 1, 2].map(|a| (lo[a] - self.min[a]).max(0) as usize);
+        let hi = [0, 1, 2].map(|a| (hi[a] - self.min[a]).clamp(0, self.dims[a] as i64) as usize);
+        if (0..3).any(|a| lo[a] >= hi[a]) {
+            return false;
+        }
+        for z in lo[2]..hi[2] {
+            for (y, xs) in self.rows_at(z, lo[1], hi[1]) {
+                let from = xs.partition_point(|&x| (x as usize) < lo[0]);
+                for &x in xs[from..].iter().take_while(|&&x| (x as usize) < hi[0]) {
+                    let key = [
+                        x as i64 + self.min[0],
+                        y as i64 + self.min[1],
+                        z as i64 + self.min[2],
+                    ];
+                    if visit(key) {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    /// The distances of the chunk whose first cell has offsets `start`: the exact
+    /// transform (Felzenszwalb and Huttenlocher, 2012) of the occupied cells in whole rows
+    /// along x and within a border of `pad` cells along y and z. A cell whose distance
+    /// found is at most `pad + 1` cells is exact (any occupied cell outside the border is
+    /// farther); if some cell is not, the border grows and the chunk is computed again.
+    fn compute_chunk(&self, start: [usize; 3]) -> Box<[f32]> {
+        let [_, ny, nz] = self.dims;
+        let end = [0, 1, 2].map(|a| (start[a] + CHUNK).min(self.dims[a]));
+        let cx = end[0] - start[0];
+        let (cy, cz) = (end[1] - start[1], end[2] - start[2]);
+        let mut pad = FIRST_PAD;
+        loop {
+            let (y0, y1) = (start[1].saturating_sub(pad), (end[1] + pad).min(ny));
+            let (z0, z1) = (start[2].saturating_sub(pad), (end[2] + pad).min(nz));
+            let whole = y0 == 0 && y1 == ny && z0 == 0 && z1 == nz;
+            let (py, pz) = (y1 - y0, z1 - z0);
+            let longest = py.max(pz);
+            // Along x, whole rows: the squared distance to the nearest occupied cell of the
+            // row, laid out `(z * py + y) * cx + x`.
+            let mut g = vec![FAR; cx * py * pz];
+            for z in z0..z1 {
+                for (y, xs) in self.rows_at(z, y0, y1) {
+                    let line = &mut g[((z - z0) * py + (y - y0)) * cx..][..cx];
+                    nearest_in_list(xs, start[0], line);
+                }
+            }
+            let (mut f, mut out) = (vec![0f32; longest], vec![0f32; longest]);
+            let (mut vs, mut zs) = (vec![0usize; longest], vec![0f32; longest + 1]);
+            // Along y, kept only for the chunk's rows: `(z * cy + y) * cx + x`.
+            let mut g2 = vec![FAR; cx * cy * pz];
+            for z in 0..pz {
+                for x in 0..cx {
+                    for y in 0..py {
+                        f[y] = g[(z * py + y) * cx + x];
+                    }
+                    if f[..py].iter().all(|&d| d == FAR) {
+                        continue;
+                    }
+                    edt_1d_range(&f[..py], start[1] - y0, &mut out[..cy], &mut vs, &mut zs);
+                    for y in 0..cy {
+                        g2[(z * cy + y) * cx + x] = out[y];
+                    }
+                }
+            }
+            // Along z, kept only for the chunk's cells.
+            let mut dist = vec![f32::INFINITY; CHUNK_CELLS].into_boxed_slice();
+            let reach = ((pad + 1) * (pad + 1)) as f32;
+            // The largest squared distance found that is not certain yet.
+            let mut undecided = 0f32;
+            for y in 0..cy {
+                for x in 0..cx {
+                    for z in 0..pz {
+                        f[z] = g2[(z * cy + y) * cx + x];
+                    }
+                    if f[..pz].iter().all(|&d| d == FAR) {
+                        undecided = FAR;
+                        continue;
+                    }
+                    edt_1d_range(&f[..pz], start[2] - z0, &mut out[..cz], &mut vs, &mut zs);
+                    for z in 0..cz {
+                        let q = out[z];
+                        if !whole && q > reach {
+                            undecided = undecided.max(q);
+                        }
+                        dist[(z * CHUNK + y) * CHUNK + x] = if q >= FAR / 2.0 {
+                            f32::INFINITY
+                        } else {
+                            q.sqrt() * self.voxel
+                        };
+                    }
+                }
+            }
+            if whole || undecided == 0.0 {
+                return dist;
+            }
+            // A border as wide as the farthest distance found holds every nearest
+            // occupied cell (the distances can only shrink as it widens); with none found,
+            // the border grows by a factor.
+            pad = if undecided < FAR / 2.0 {
+                (undecided.sqrt().ceil() as usize).max(pad + 1)
+            } else {
+                pad * PAD_GROWTH
+            };
+        }
+    }
+}
+
+/// Squared distances (in cells) from cells `start .. start + out.len()` of a row to the
+/// nearest of its occupied cells `xs` (ascending), written to `out`; the same values as
+/// the transform of the whole row.
+fn nearest_in_list(xs: &[u32], start: usize, out: &mut [f32]) {
+    let mut i = xs.partition_point(|&x| (x as usize) < start);
+    for (j, d) in out.iter_mut().enumerate() {
+        let x = start + j;
+        while i < xs.len() && (xs[i] as usize) < x {
+            i += 1;
+        }
+        let right = xs.get(i).map(|&r| r as usize - x);
+        let left = i.checked_sub(1).map(|l| x - xs[l] as usize);
+        if let Some(n) = match (left, right) {
+            (Some(l), Some(r)) => Some(l.min(r)),
+            (l, r) => l.or(r),
+        } {
+            *d = (n * n) as f32;
+        }
+    }
+}
+
+/// One-dimensional squared distance transform of sampled function `f` (lower envelope of parabolas).
+fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
+    edt_1d_range(f, 0, d, v, z);
+}
+
+/// [`edt_1d`] written only for the positions `from .. from + d.len()` of `f` (the same
+/// values, bit for bit).
+fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
+    let n = f.len();
+    let mut k = 0usize;
+    v[0] = 0;
+    z[0] = f32::NEG_INFINITY;
+    z[1] = f32::INFINITY;
+    for q in 1..n {
+        loop {
+            let p = v[k];
+            let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32))
+                / (2.0 * q as f32 - 2.0 * p as f32);
+            if s <= z[k] && k > 0 {
+                k -= 1;
+            } else if s <= z[k] {
+                // k == 0 and the new parabola dominates from -inf: replace.
+                v[0] = q;
+                z[0] = f32::NEG_INFINITY;
+                z[1] = f32::INFINITY;
+                break;
+            } else {
+                k += 1;
+                v[k] = q;
+                z[k] = s;
+                z[k + 1] = f32::INFINITY;
+                break;
+            }
+        }
+    }
+    k = 0;
+    for (q, dq) in d.iter_mut().enumerate().take(n - from.min(n)) {
+        let q = q + from;
+        while z[k + 1] < q as f32 {
+            k += 1;
+        }
+        let p = v[k];
+        let diff = q as f32 - p as f32;
+        *dq = diff * diff + f[p];
+    }
+}
+
+mod dense {
+    //! The dense exact transform over the whole box, for boxes small enough to hold at
+    //! once ([`DENSE_CELLS`]): faster than chunks there; the chunked field equals it bit
+    //! for bit.
+    use super::*;
+
     /// Exact Euclidean distance transform (Felzenszwalb and Huttenlocher, 2012) of the
     /// occupied voxel `keys`, in metres. Lines along each axis are transformed in parallel;
     /// the result is stored y-major (`(y * nz + z) * nx + x`), the layout the last pass
     /// writes.
-    fn new(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]], v: f64) -> DistanceField {
+    pub(super) fn dense_distances(
+        min: [i64; 3],
+        dims: [usize; 3],
+        keys: &[[i64; 3]],
+        v: f64,
+    ) -> Vec<f32> {
         use rayon::prelude::*;
-        const FAR: f32 = 1e20;
         let [nx, ny, nz] = dims;
         // Squared distances in cells, z-major (`(z * ny + y) * nx + x`) for the first passes.
         let mut d = vec![FAR; nx * ny * nz];
@@ -553,134 +980,36 @@ impl DistanceField {
                 }
             },
         );
-        DistanceField { min, dims, dist }
+        dist
     }
 
-    /// Calls `visit` on the occupied cells (distance 0) with keys in the half-open box
-    /// `lo..hi` until it returns true; returns whether it did. The box is walked in lines
-    /// along axis `axes[0]`, one per cell of the other two; `voxel` is the cell size,
-    /// metres.
-    fn any_occupied(
-        &self,
-        lo: [i64; 3],
-        hi: [i64; 3],
-        axes: [usize; 3],
-        voxel: f64,
-        mut visit: impl FnMut([i64; 3]) -> bool,
-    ) -> bool {
-        // A free cell at distance d (metres) from the nearest occupied cell centre has
-        // only free cells within d / voxel steps of it: skip them (a little less, against
-        // the f32 rounding of d, which is far below 1e-5 relative).
-        let steps_per_metre = ((1.0 - 1e-5) / voxel) as f32;
-        let [nx, _, nz] = self.dims;
-        // Index steps of x, y and z in the y-major layout.
-        let stride = [1, nz * nx, nx];
-        let min = self.min;
-        let lo = [0, 1, 2].map(|i| (lo[i] - min[i]).max(0));
-        let hi = [0, 1, 2].map(|i| (hi[i] - min[i]).min(self.dims[i] as i64));
-        let [a, b, c] = axes;
-        let mut key = [0i64; 3];
-        for kb in lo[b]..hi[b] {
-            for kc in lo[c]..hi[c] {
-                let base = kb as usize * stride[b] + kc as usize * stride[c];
-                let (mut x, end) = (lo[a], hi[a]);
-                while x < end {
-                    let d = self.dist[base + x as usize * stride[a]];
-                    if d == 0.0 {
-                        key[a] = x + min[a];
-                        key[b] = kb + min[b];
-                        key[c] = kc + min[c];
-                        if visit(key) {
-                            return true;
-                        }
-                        x += 1;
-                    } else {
-                        x += ((d * steps_per_metre) as i64).clamp(1, end - x);
-                    }
-                }
+    /// Squared distances (in cells) along a row of 0 (occupied) and FAR cells to its nearest
+    /// occupied cell, in place; a row without one stays FAR. Equal, bit for bit, to
+    /// [`edt_1d`] of the row (both are exact: squared distances are small integers in f32).
+    pub(super) fn nearest_in_row(row: &mut [f32]) {
+        let mut last = None;
+        for (x, d) in row.iter_mut().enumerate() {
+            if *d == 0.0 {
+                last = Some(x);
+            } else if let Some(p) = last {
+                *d = ((x - p) * (x - p)) as f32;
             }
         }
-        false
-    }
-
-    fn get(&self, k: [i64; 3]) -> Option<f32> {
-        let mut idx = [0usize; 3];
-        for a in 0..3 {
-            let i = k[a] - self.min[a];
-            if i < 0 || i as usize >= self.dims[a] {
-                return None;
-            }
-            idx[a] = i as usize;
-        }
-        Some(self.dist[(idx[1] * self.dims[2] + idx[2]) * self.dims[0] + idx[0]])
-    }
-}
-
-/// Squared distances (in cells) along a row of 0 (occupied) and FAR cells to its nearest
-/// occupied cell, in place; a row without one stays FAR. Equal, bit for bit, to
-/// [`edt_1d`] of the row (both are exact: squared distances are small integers in f32).
-fn nearest_in_row(row: &mut [f32]) {
-    let mut last = None;
-    for (x, d) in row.iter_mut().enumerate() {
-        if *d == 0.0 {
-            last = Some(x);
-        } else if let Some(p) = last {
-            *d = ((x - p) * (x - p)) as f32;
-        }
-    }
-    let mut next = None;
-    for (x, d) in row.iter_mut().enumerate().rev() {
-        if *d == 0.0 {
-            next = Some(x);
-        } else if let Some(p) = next {
-            *d = d.min(((p - x) * (p - x)) as f32);
-        }
-    }
-}
-
-/// One-dimensional squared distance transform of sampled function `f` (lower envelope of parabolas).
-fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
-    let n = f.len();
-    let mut k = 0usize;
-    v[0] = 0;
-    z[0] = f32::NEG_INFINITY;
-    z[1] = f32::INFINITY;
-    for q in 1..n {
-        loop {
-            let p = v[k];
-            let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32))
-                / (2.0 * q as f32 - 2.0 * p as f32);
-            if s <= z[k] && k > 0 {
-                k -= 1;
-            } else if s <= z[k] {
-                // k == 0 and the new parabola dominates from -inf: replace.
-                v[0] = q;
-                z[0] = f32::NEG_INFINITY;
-                z[1] = f32::INFINITY;
-                break;
-            } else {
-                k += 1;
-                v[k] = q;
-                z[k] = s;
-                z[k + 1] = f32::INFINITY;
-                break;
+        let mut next = None;
+        for (x, d) in row.iter_mut().enumerate().rev() {
+            if *d == 0.0 {
+                next = Some(x);
+            } else if let Some(p) = next {
+                *d = d.min(((p - x) * (p - x)) as f32);
             }
         }
-    }
-    k = 0;
-    for (q, dq) in d.iter_mut().enumerate().take(n) {
-        while z[k + 1] < q as f32 {
-            k += 1;
-        }
-        let p = v[k];
-        let diff = q as f32 - p as f32;
-        *dq = diff * diff + f[p];
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use dense::*;
 
     fn cfg(floor: bool) -> SceneConfig {
         SceneConfig {
@@ -707,6 +1036,106 @@ mod tests {
             a: Point3::new(x, y, bottom),
             b: Point3::new(x, y, top),
             radius: r,
+        }
+    }
+
+    /// Occupied keys of a seeded scene in a box: a slab, a wall, a post, and `strays` lone
+    /// cells scattered far apart (so chunks far from everything grow their border).
+    fn random_keys(seed: u64, dims: [usize; 3], strays: usize) -> Vec<[i64; 3]> {
+        let mut state = seed;
+        let mut next = |n: usize| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) as usize) % n.max(1)
+        };
+        let mut keys = Vec::new();
+        let h = next(dims[2]);
+        for x in 3..dims[0] / 2 {
+            for y in 5..dims[1] / 3 {
+                keys.push([x as i64, y as i64, h as i64]);
+            }
+        }
+        let wx = next(dims[0]);
+        for y in 0..dims[1] {
+            for z in 0..dims[2] / 2 {
+                keys.push([wx as i64, y as i64, z as i64]);
+            }
+        }
+        let (px, py) = (next(dims[0]), next(dims[1]));
+        for z in 0..dims[2] {
+            keys.push([px as i64, py as i64, z as i64]);
+        }
+        for _ in 0..strays {
+            keys.push([next(dims[0]), next(dims[1]), next(dims[2])].map(|c| c as i64));
+        }
+        keys.sort_unstable();
+        keys.dedup();
+        keys
+    }
+
+    #[test]
+    fn chunked_field_equals_the_dense_transform_bit_for_bit() {
+        // Boxes smaller and larger than a chunk, not multiples of it, offset from the
+        // origin; sparse scenes (only strays) make chunks grow their border to the box.
+        for (seed, dims, strays) in [
+            (1u64, [7usize, 5, 3], 0usize),
+            (2, [70, 41, 33], 5),
+            (3, [150, 97, 40], 0),
+            (4, [200, 180, 30], 3),
+        ] {
+            let mut keys = random_keys(seed, dims, strays);
+            if seed == 4 {
+                // Only the strays: most cells are far from everything.
+                keys.truncate(0);
+                keys.extend([[3, 170, 2], [190, 4, 27], [100, 90, 15]]);
+            }
+            let min = [-13, 7, -2];
+            let keys: Vec<[i64; 3]> = keys
+                .iter()
+                .map(|k| [k[0] + min[0], k[1] + min[1], k[2] + min[2]])
+                .collect();
+            let want = dense_distances(min, dims, &keys, 0.02);
+            let field = DistanceField::with_dense_limit(min, dims, &keys, 0.02, 0);
+            assert!(field.dense.is_none());
+            let whole = DistanceField::new(min, dims, &keys, 0.02);
+            assert_eq!(whole.dense.as_deref(), Some(&want[..]));
+            let [nx, ny, nz] = dims;
+            for y in 0..ny {
+                for z in 0..nz {
+                    for x in 0..nx {
+                        let k = [x as i64 + min[0], y as i64 + min[1], z as i64 + min[2]];
+                        let got = field.get(k).unwrap();
+                        let w = want[(y * nz + z) * nx + x];
+                        assert_eq!(got.to_bits(), w.to_bits(), "seed {seed} at {k:?}");
+                        assert_eq!(field.occupied(k), w == 0.0, "seed {seed} at {k:?}");
+                        if (x + 3 * y + 7 * z) % 11 == 0 {
+                            let alone = field.cell_distance([x, y, z]);
+                            assert_eq!(alone.to_bits(), w.to_bits(), "seed {seed} at {k:?}");
+                        }
+                    }
+                }
+            }
+            assert_eq!(field.get([min[0] - 1, min[1], min[2]]), None);
+            // The occupied cells of sub-boxes are the keys inside them.
+            for (lo, hi) in [
+                ([-20, 0, -5], [100, 300, 100]),
+                ([0, 10, 0], [5, 30, 3]),
+                ([-13, 7, -2], [-12, 8, -1]),
+            ] {
+                let mut seen = Vec::new();
+                field.any_occupied(lo, hi, |k| {
+                    seen.push(k);
+                    false
+                });
+                seen.sort_unstable();
+                let inside: Vec<[i64; 3]> = keys
+                    .iter()
+                    .filter(|k| (0..3).all(|a| k[a] >= lo[a] && k[a] < hi[a]))
+                    .copied()
+                    .collect();
+                assert_eq!(seen, inside, "seed {seed}");
+            }
         }
     }
 

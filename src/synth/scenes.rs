@@ -4,7 +4,9 @@
 //!   floor (100k-300k points);
 //! - `room_view`: one depth view (640 x 480, up to 6 m) of a furnished room corner
 //!   (200k-300k points);
-//! - `room_scan`: the same room sampled from all its surfaces (about 1M points).
+//! - `room_scan`: the same room sampled from all its surfaces (about 1M points);
+//! - `big_floor`: one chair on a 200 m x 200 m floor sampled every metre (issue 15: a
+//!   large connected scene whose bounding box is far larger than what a body reaches).
 //!
 //! World frame: metres, z up, floor at z = 0. Deterministic: same points on every call.
 
@@ -16,6 +18,31 @@ use crate::cloud::PointCloud;
 
 /// Points wanted in the complete room scan (issue 12: "a 1M-point room scan").
 pub const ROOM_SCAN_POINTS: f64 = 1.0e6;
+/// Edge of the big floor, metres (issue 15: "a 200 m x 200 m floor").
+pub const BIG_FLOOR_EDGE: f64 = 200.0;
+
+/// One chair in the middle of a [`BIG_FLOOR_EDGE`] square floor: the chair and a patch of
+/// floor around it sampled as a depth camera at 1-2 m would (30,000 points per m^2, so
+/// most points are 5-6 mm apart and the units check sees metres), the rest of the floor
+/// every metre (one connected region).
+pub fn big_floor() -> PointCloud {
+    let mid = BIG_FLOOR_EDGE / 2.0;
+    let mut pts = scene_cloud(
+        &[chair(&ChairParams::default()).placed(mid, mid, 0.0)],
+        30_000.0,
+        0.0,
+        4,
+        true,
+    )
+    .points;
+    let n = BIG_FLOOR_EDGE as usize;
+    for i in 0..=n {
+        for j in 0..=n {
+            pts.push(Point3::new(i as f64, j as f64, 0.0));
+        }
+    }
+    PointCloud::new(pts)
+}
 
 /// The furniture of a room corner: an armchair, a chair at a table, a stool, a three-seat
 /// sofa, a bed, and two walls meeting in a corner (the committed sample's layout, with a
@@ -55,7 +82,7 @@ fn view(
     render_view(&mesh, &camera, seed).0
 }
 
-/// The three scenes, by name, in the order chair view, room view, room scan.
+/// The four scenes, by name, in the order chair view, room view, room scan, big floor.
 pub fn speed_scenes() -> Vec<(&'static str, PointCloud)> {
     // A Kinect v1 (0.5-4 m) 2 m in front of an armchair, a little above it.
     let chair_view = view(
@@ -81,6 +108,7 @@ pub fn speed_scenes() -> Vec<(&'static str, PointCloud)> {
         ("chair_view", chair_view),
         ("room_view", room_view),
         ("room_scan", room_scan),
+        ("big_floor", big_floor()),
     ]
 }
 
@@ -102,6 +130,10 @@ mod tests {
             "{}",
             size("room_view")
         );
+        let floor = scenes.iter().find(|(n, _)| *n == "big_floor").unwrap();
+        let (lo, hi) = floor.1.bounds().unwrap();
+        assert_eq!((hi.x - lo.x, hi.y - lo.y), (BIG_FLOOR_EDGE, BIG_FLOOR_EDGE));
+        assert!(size("big_floor") > 40_401, "{}", size("big_floor"));
         let scan = size("room_scan") as f64;
         assert!(
             (scan - ROOM_SCAN_POINTS).abs() < 0.02 * ROOM_SCAN_POINTS,

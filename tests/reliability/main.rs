@@ -11,6 +11,7 @@ mod eval_convert_up;
 mod fine_voxel_budget;
 mod header_count_too_small;
 mod huge_coordinates;
+mod large_connected_floor;
 mod mesh_file_size;
 mod millimetres_warn_first;
 mod misleading_messages;
