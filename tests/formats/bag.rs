@@ -341,9 +341,10 @@ fn bag_error(name: &str, bytes: &[u8]) -> String {
 
 #[test]
 fn a_forged_string_length_is_an_error_not_a_4_gb_allocation() {
-    // Found by the `bag` fuzz target: the `mcap` crate (0.26) reserves what a string's
-    // length field says before reading it, here 4 GB for a channel topic of 3 bytes,
-    // which aborts under an address-space limit. The reader checks every length first.
+    // The defect the `bag` fuzz target found, rebuilt by hand: the `mcap` crate (0.26)
+    // reserves what a string's length field says before reading it, here 4 GB for a
+    // channel topic of 3 bytes, which aborts under an address-space limit. The reader
+    // checks every length first.
     let mut channel = vec![1, 0, 0, 0];
     channel.extend(0xFFFF_FFF0u32.to_le_bytes());
     channel.extend(b"/pc");
@@ -356,10 +357,10 @@ fn a_forged_string_length_is_an_error_not_a_4_gb_allocation() {
 
 #[test]
 fn a_record_longer_than_its_uncompressed_chunk_is_an_error_not_an_overflow() {
-    // Found by the `bag` fuzz target: in an uncompressed chunk whose records field holds 9
-    // bytes, a record claiming 20 bytes (the footer after the chunk supplies them) made
-    // the `mcap` crate subtract 29 from the chunk's 9 remaining bytes, a panic where
-    // overflow checks are on. The record must fit in the chunk.
+    // The defect the `bag` fuzz target found, rebuilt by hand: in an uncompressed chunk
+    // whose records field holds 9 bytes, a record claiming 20 bytes (the footer after the
+    // chunk supplies them) made the `mcap` crate subtract 29 from the chunk's 9 remaining
+    // bytes, a panic where overflow checks are on. The record must fit in the chunk.
     let mut record = vec![0x80];
     record.extend(20u64.to_le_bytes());
     let e = bag_error("chunk.mcap", &mcap_file(&[(0x06, chunk(9, "", &record))]));
