@@ -107,26 +107,32 @@ impl<'a> Fields<'a> {
         &self.bytes[self.pos..]
     }
 
-    /// The next record (opcode, length as u64, body): its offset, opcode and body, or
-    /// `None` at the end of the bytes.
-    fn record(&mut self) -> Result<Option<(usize, u8, &'a [u8])>, (usize, String)> {
+    /// The next record (opcode, length as u64, body), or `None` at the end of the bytes;
+    /// an error says where the record starts and what is missing.
+    fn record(&mut self) -> Result<Option<Record<'a>>, (usize, String)> {
         let at = self.pos;
         if at == self.bytes.len() {
             return Ok(None);
         }
-        let read = |f: &mut Self| -> Result<(u8, &'a [u8]), String> {
+        let read = |f: &mut Self| -> Result<Record<'a>, String> {
             let [opcode] = f.array::<1>("record opcode")?;
             let len = f.u64("record length")?;
-            Ok((
-                opcode,
-                f.take(len, &format!("record (opcode {opcode:#04x})"))?,
-            ))
+            let body = f.take(len, &format!("record (opcode {opcode:#04x})"))?;
+            Ok(Record { at, opcode, body })
         };
-        read(self)
-            .map(|(o, b)| Some((at, o, b)))
-            .map_err(|e| (at, e))
+        read(self).map(Some).map_err(|e| (at, e))
     }
 }
+
+/// One record: where it starts (bytes into the file or chunk), its opcode and body.
+struct Record<'a> {
+    at: usize,
+    opcode: u8,
+    body: &'a [u8],
+}
+
+/// Takes each message of a bag: its channel, log time (ns) and data.
+type OnMessage<'f> = dyn FnMut(&Channel, u64, &[u8]) -> Result<(), CloudError> + 'f;
 
 /// A channel as the bag defines it.
 #[derive(Debug, Clone, PartialEq)]
@@ -270,7 +276,7 @@ fn walk(
     path: &Path,
     buf: &[u8],
     chunks: bool,
-    each: &mut dyn FnMut(&Channel, u64, &[u8]) -> Result<(), CloudError>,
+    each: &mut OnMessage,
 ) -> Result<Vec<Channel>, CloudError> {
     if !buf.starts_with(MAGIC) {
         return Err(body(
@@ -285,7 +291,11 @@ fn walk(
     let mut summary = Table::default();
     let mut past_end = false;
     loop {
-        let Some((at, opcode, record)) = file
+        let Some(Record {
+            at,
+            opcode,
+            body: record,
+        }) = file
             .record()
             .map_err(|(at, e)| body(path, format!("byte {at}"), e))?
         else {
@@ -315,8 +325,11 @@ fn walk(
                 let inner = chunk_records(record).map_err(here)?;
                 let mut f = Fields::new(&inner);
                 let within = |i: usize| format!("byte {i} of the chunk at byte {at}");
-                while let Some((i, opcode, record)) =
-                    f.record().map_err(|(i, e)| body(path, within(i), e))?
+                while let Some(Record {
+                    at: i,
+                    opcode,
+                    body: record,
+                }) = f.record().map_err(|(i, e)| body(path, within(i), e))?
                 {
                     let inside = |e: String| body(path, within(i), e);
                     match opcode {
