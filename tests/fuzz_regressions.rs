@@ -63,6 +63,16 @@ fn seed_corpora_are_valid() {
         let m = afford::cloud::read_mesh(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(!m.triangles.is_empty(), "{name}");
     }
+    for (name, bytes) in corpus("bag") {
+        if name.ends_with(".mcap") {
+            // Each seed bag holds two PointCloud2 messages (plain, lz4 and zstd chunks).
+            let p = file(&dir, "seed.mcap", &bytes);
+            let opts = afford::cloud::SourceOptions::default();
+            let n = afford::cloud::read_parts(&p, &opts, &mut |_| {})
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(n, 2, "{name}");
+        }
+    }
     let agent = builtin();
     for (name, bytes) in corpus("toml") {
         let text = String::from_utf8(bytes).unwrap();

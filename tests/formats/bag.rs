@@ -285,7 +285,7 @@ fn convert_takes_one_message_by_time_and_refuses_a_choice_of_several() {
 #[test]
 fn a_forged_record_length_is_an_error_not_an_allocation_failure() {
     // Found by the `bag` fuzz target: a record inside a zstd chunk claims 434 PB, which
-    // the `mcap` crate used to allocate (abort) before `MAX_RECORD` was set.
+    // the `mcap` crate allocated (abort); every record must fit in the bytes it is in.
     let d = tempfile::tempdir().unwrap();
     let p = d.path().join("forged.mcap");
     std::fs::write(&p, include_bytes!("crash_record_length.mcap")).unwrap();
@@ -293,7 +293,97 @@ fn a_forged_record_length_is_an_error_not_an_allocation_failure() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("forged.mcap") && e.contains("exceeds limit"),
+        e.contains("forged.mcap") && e.contains("of the chunk at byte") && e.contains("needs"),
         "{e}"
     );
+}
+
+/// An MCAP file: the magic, `records` (opcode, body), a footer (no summary) and the magic.
+fn mcap_file(records: &[(u8, Vec<u8>)]) -> Vec<u8> {
+    let mut out = mcap::MAGIC.to_vec();
+    let footer = (0x02, vec![0u8; 20]);
+    for (op, body) in records.iter().chain([&footer]) {
+        out.push(*op);
+        out.extend((body.len() as u64).to_le_bytes());
+        out.extend(body);
+    }
+    out.extend(mcap::MAGIC);
+    out
+}
+
+/// The body of a chunk record: times 0, `size` bytes uncompressed, no CRC, `compression`,
+/// then `records` (as stored).
+fn chunk(size: u64, compression: &str, records: &[u8]) -> Vec<u8> {
+    let mut c = vec![0u8; 16];
+    c.extend(size.to_le_bytes());
+    c.extend(0u32.to_le_bytes());
+    c.extend((compression.len() as u32).to_le_bytes());
+    c.extend(compression.as_bytes());
+    c.extend((records.len() as u64).to_le_bytes());
+    c.extend(records);
+    c
+}
+
+/// Reads `bytes` as `name` and returns the error, which must be one line naming the file.
+fn bag_error(name: &str, bytes: &[u8]) -> String {
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join(name);
+    std::fs::write(&p, bytes).unwrap();
+    let e = read_parts(&p, &SourceOptions::default(), &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with(&p.display().to_string()) && !e.contains('\n'),
+        "{e}"
+    );
+    e
+}
+
+#[test]
+fn a_forged_string_length_is_an_error_not_a_4_gb_allocation() {
+    // The defect the `bag` fuzz target found, rebuilt by hand: the `mcap` crate (0.26)
+    // reserves what a string's length field says before reading it, here 4 GB for a
+    // channel topic of 3 bytes, which aborts under an address-space limit. The reader
+    // checks every length first.
+    let mut channel = vec![1, 0, 0, 0];
+    channel.extend(0xFFFF_FFF0u32.to_le_bytes());
+    channel.extend(b"/pc");
+    let e = bag_error("string.mcap", &mcap_file(&[(0x04, channel)]));
+    assert!(
+        e.contains("byte 8") && e.contains("channel topic needs 4294967280 bytes, 3 are left"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_record_longer_than_its_uncompressed_chunk_is_an_error_not_an_overflow() {
+    // The defect the `bag` fuzz target found, rebuilt by hand: in an uncompressed chunk
+    // whose records field holds 9 bytes, a record claiming 20 bytes (the footer after the
+    // chunk supplies them) made the `mcap` crate subtract 29 from the chunk's 9 remaining
+    // bytes, a panic where overflow checks are on. The record must fit in the chunk.
+    let mut record = vec![0x80];
+    record.extend(20u64.to_le_bytes());
+    let e = bag_error("chunk.mcap", &mcap_file(&[(0x06, chunk(9, "", &record))]));
+    assert!(
+        e.contains("byte 0 of the chunk at byte 8") && e.contains("needs 20 bytes, 0 are left"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_compressed_chunk_that_inflates_to_another_size_is_an_error() {
+    // The header's uncompressed size is checked against what the chunk inflates to, and
+    // a size over the 1 GiB limit is refused before anything is inflated.
+    let records = [0x80u8, 0, 0, 0, 0, 0, 0, 0, 0];
+    let chunk = |size: u64, compressed: &[u8]| chunk(size, "zstd", compressed);
+    let z = zstd::encode_all(&records[..], 3).unwrap();
+    let e = bag_error("short.mcap", &mcap_file(&[(0x06, chunk(10, &z))]));
+    assert!(e.contains("inflates to 9 bytes, its header says 10"), "{e}");
+    let e = bag_error("long.mcap", &mcap_file(&[(0x06, chunk(8, &z))]));
+    assert!(e.contains("inflates to more than 8 bytes"), "{e}");
+    let e = bag_error("huge.mcap", &mcap_file(&[(0x06, chunk(1 << 40, &z))]));
+    assert!(e.contains("exceeds limit"), "{e}");
+    // The same chunk with its true size reads (no PointCloud2 topic: a selection error).
+    let e = bag_error("fine.mcap", &mcap_file(&[(0x06, chunk(9, &z))]));
+    assert!(e.contains("no sensor_msgs/PointCloud2 topic"), "{e}");
 }
