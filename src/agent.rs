@@ -41,10 +41,23 @@ pub struct Joint {
     pub origin: Vector3<f64>,
     /// Rotation axis in the parent's frame (unit); a positive angle turns by the right-hand rule.
     pub axis: Unit<Vector3<f64>>,
-    /// Anatomical limits `(lower, upper)`, radians.
+    /// Anatomical limits `(lower, upper)`, radians; `(0, 0)` for a fixed joint.
     pub limit: (f64, f64),
+    /// Whether the joint turns.
+    pub kind: JointKind,
     /// The body part carried by this joint, if any.
     pub link: Option<Link>,
+}
+
+/// How a joint moves (the file's `type`, as in URDF).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JointKind {
+    /// Turns about its axis within its limits (degrees in the file).
+    #[default]
+    Revolute,
+    /// Does not turn: no axis, no limit (the root, whose placement is the body's).
+    Fixed,
 }
 
 /// A body part: a cylinder between two points of its joint's frame.
@@ -115,9 +128,13 @@ struct JointFile {
     name: String,
     #[serde(default)]
     parent: Option<String>,
+    #[serde(rename = "type", default)]
+    kind: JointKind,
     origin: [f64; 3],
-    axis: [f64; 3],
-    limit: LimitFile,
+    #[serde(default)]
+    axis: Option<[f64; 3]>,
+    #[serde(default)]
+    limit: Option<LimitFile>,
     #[serde(default)]
     link: Option<LinkFile>,
 }
@@ -215,21 +232,36 @@ impl Agent {
                 format!("must be within {MAX_REACH} H of the parent joint"),
             ));
         }
-        let axis = Vector3::from(j.axis);
-        if !finite(&j.axis) || axis.norm() < 1e-9 {
-            return Err(src.invalid(&key.key("axis"), "must be a non-zero vector"));
-        }
-        if !(j.limit.lower.is_finite() && j.limit.upper.is_finite())
-            || j.limit.lower > j.limit.upper
-        {
-            return Err(src.invalid(
-                &key.key("limit"),
-                format!(
-                    "lower = {} must not exceed upper = {}",
-                    j.limit.lower, j.limit.upper
-                ),
-            ));
-        }
+        let (axis, limit) = match (j.kind, j.axis, &j.limit) {
+            (JointKind::Fixed, None, None) => (Vector3::z(), (0.0, 0.0)),
+            (JointKind::Fixed, _, _) => {
+                let k = if j.axis.is_some() { "axis" } else { "limit" };
+                return Err(src.invalid(
+                    &key.key(k),
+                    "a fixed joint does not turn: it takes no axis and no limit",
+                ));
+            }
+            (JointKind::Revolute, None, _) | (JointKind::Revolute, _, None) => {
+                let k = if j.axis.is_none() { "axis" } else { "limit" };
+                return Err(src.invalid(
+                    &key.key(k),
+                    format!("a revolute joint needs `{k}` (or `type = \"fixed\"`)"),
+                ));
+            }
+            (JointKind::Revolute, Some(a), Some(l)) => {
+                let axis = Vector3::from(a);
+                if !finite(&a) || axis.norm() < 1e-9 {
+                    return Err(src.invalid(&key.key("axis"), "must be a non-zero vector"));
+                }
+                if !(l.lower.is_finite() && l.upper.is_finite()) || l.lower > l.upper {
+                    return Err(src.invalid(
+                        &key.key("limit"),
+                        format!("lower = {} must not exceed upper = {}", l.lower, l.upper),
+                    ));
+                }
+                (axis, (l.lower.to_radians(), l.upper.to_radians()))
+            }
+        };
         let link = match &j.link {
             None => None,
             Some(l) => {
@@ -274,7 +306,8 @@ impl Agent {
             parent,
             origin: Vector3::from(j.origin) * h,
             axis: Unit::new_normalize(axis),
-            limit: (j.limit.lower.to_radians(), j.limit.upper.to_radians()),
+            limit,
+            kind: j.kind,
             link,
         })
     }
@@ -583,6 +616,34 @@ limit = { lower = 0.0, upper = 10.0 }
             line,
             "joint.knee.colour",
             "unknown field `colour`",
+        );
+    }
+
+    #[test]
+    fn a_fixed_joint_takes_no_axis_or_limit_and_a_revolute_one_needs_both() {
+        let fixed = TWO_LINKS.replacen(
+            "axis = [0.0, -1.0, 0.0]\nlimit = { lower = -30.0, upper = 120.0 }",
+            "type = \"fixed\"",
+            1,
+        );
+        let a = Agent::from_toml(&fixed, Path::new("x.toml"), 1.75).unwrap();
+        assert_eq!(a.joints[0].kind, JointKind::Fixed);
+        assert_eq!(a.joints[0].limit, (0.0, 0.0));
+        assert_eq!(a.joints[1].kind, JointKind::Revolute);
+        // A fixed joint with a limit: named.
+        let bad = TWO_LINKS.replacen("axis = [0.0, -1.0, 0.0]\n", "type = \"fixed\"\n", 1);
+        names(
+            &error(&bad),
+            7,
+            "joint.hip.limit",
+            "a fixed joint does not turn",
+        );
+        // A revolute joint without a limit: named.
+        let bad = TWO_LINKS.replacen("limit = { lower = 0.0, upper = 150.0 }\n", "", 1);
+        let e = error(&bad);
+        assert!(
+            e.contains(": joint.knee.limit: a revolute joint needs `limit`"),
+            "{e}"
         );
     }
 

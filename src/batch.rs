@@ -70,7 +70,7 @@ pub enum BatchError {
         #[source]
         source: std::io::Error,
     },
-    /// A saved output is not a detect JSON (version 2 or 3) or summary CSV.
+    /// A saved output is not a detect JSON (version 2 to 4) or summary CSV.
     #[error("{path}: {what}")]
     Saved {
         /// The saved output.
@@ -355,7 +355,8 @@ pub fn read_document(text: &str, path: &Path) -> Result<Document, BatchError> {
     };
     let not_ours = |e: serde_json::Error| bad(format!("not an `afford detect` JSON output: {e}"));
     let v: Version = serde_json::from_str(text).map_err(not_ours)?;
-    // Version 3 only added joint positions, which version 2 documents read as empty.
+    // Version 3 only added joint positions, which version 2 documents read as empty; 4
+    // only turned the sign of lying hip angles, which are not read here.
     if !(2..=JSON_VERSION).contains(&v.version) {
         return Err(bad(format!(
             "JSON version {} (this afford reads versions 2 to {JSON_VERSION})",
@@ -365,7 +366,7 @@ pub fn read_document(text: &str, path: &Path) -> Result<Document, BatchError> {
     serde_json::from_str(text).map_err(not_ours)
 }
 
-/// Reads a detect JSON (`--json` or one file of `--out-dir`, version 2 or 3).
+/// Reads a detect JSON (`--json` or one file of `--out-dir`, version 2 to 4).
 fn saved_json(text: &str, path: &Path) -> Result<Vec<SavedFile>, BatchError> {
     let doc = read_document(text, path)?;
     Ok(doc
@@ -661,8 +662,8 @@ mod tests {
         assert_eq!(read_document(&again, Path::new("y.json")).unwrap(), doc);
         assert_eq!(doc.files[0].detections[0].joints["pelvis"], [0.0, 0.0, 0.5]);
         // A document of another version is named by its version, not a missing field.
-        let e = read_document(r#"{"version": 4}"#, Path::new("z.json")).unwrap_err();
-        assert!(e.to_string().contains("JSON version 4"), "{e}");
+        let e = read_document(r#"{"version": 5}"#, Path::new("z.json")).unwrap_err();
+        assert!(e.to_string().contains("JSON version 5"), "{e}");
     }
 
     #[test]

@@ -262,11 +262,12 @@ pub fn affords<'a>(r: &'a FileReport, body: Option<(&str, f64)>) -> Vec<&'a Stri
         .collect()
 }
 
-/// The version of the JSON document: 3 added every joint's world position (`joints`) to
-/// each detection; 2 had several bodies per file.
-pub const JSON_VERSION: u32 = 3;
+/// The version of the JSON document: 4 gives every joint angle of `pose_deg` in its
+/// agent joint's own sign (a lying hip flexed 88 deg is +88, was -88 in 3); 3 added every
+/// joint's world position (`joints`) to each detection; 2 had several bodies per file.
+pub const JSON_VERSION: u32 = 4;
 
-/// The JSON document of a run: `{"version": 3, "files": [...]}` ([`JSON_VERSION`]) with one
+/// The JSON document of a run: `{"version": 4, "files": [...]}` ([`JSON_VERSION`]) with one
 /// entry per input file, each with its runs (body and hierarchy) and its detections (each
 /// naming its body, with its goal pose as angles and as joint positions).
 pub fn to_json(reports: &[FileReport]) -> String {
