@@ -22,9 +22,9 @@ pub const ROOM_SCAN_POINTS: f64 = 1.0e6;
 pub const BIG_FLOOR_EDGE: f64 = 200.0;
 
 /// One chair in the middle of a [`BIG_FLOOR_EDGE`] square floor: the chair and a patch of
-/// floor around it sampled as a depth camera at 1-2 m would (30,000 points per m^2, so
-/// most points are 5-6 mm apart and the units check sees metres), the rest of the floor
-/// every metre (one connected region).
+/// floor around it sampled as a depth camera at 1-2 m would (30,000 points per m^2, 5-6 mm
+/// apart), the rest of the floor every metre (one connected region; the units check,
+/// seeing points a metre apart, warns that it may be centimetres).
 pub fn big_floor() -> PointCloud {
     let mid = BIG_FLOOR_EDGE / 2.0;
     let mut pts = scene_cloud(

@@ -35,7 +35,7 @@ fn twenty_files_five_bad_under_two_gigabytes() {
     bad.push(off);
     bad.push(write_xyz(
         &dir.join("b05_two.xyz"),
-        &[[0.0; 3], [300.0, 300.0, 0.0]],
+        &[[0.0; 3], [3000.0, 3000.0, 0.0]],
     ));
     for i in 0..14 {
         let pts: Vec<[f64; 3]> = small_scene(0.1)

@@ -49,8 +49,13 @@ fn a_stray_point_is_dropped_and_the_grids_follow_the_points() {
 
 #[test]
 fn two_points_far_apart_are_refused_with_one_line_and_the_batch_goes_on() {
+    // 3 km apart: a height map of 115 GB (100 m apart is processed now: the distance
+    // field follows the points, and the height map of 100 m x 100 m is 128 MB).
     let d = tempfile::tempdir().unwrap();
-    let two = write_xyz(&d.path().join("two.xyz"), &[[0.0; 3], [100.0, 100.0, 0.0]]);
+    let two = write_xyz(
+        &d.path().join("two.xyz"),
+        &[[0.0; 3], [3000.0, 3000.0, 0.0]],
+    );
     let mut stray = small_scene(0.05);
     stray.push([100.0, 100.0, 0.0]);
     let stray = write_xyz(&d.path().join("stray.xyz"), &stray);
