@@ -74,9 +74,9 @@ struct SynthArgs {
     /// Depth-camera pixel stride (1 = 640 x 480 rays, 2 = 320 x 240, ...).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=16))]
     stride: u32,
-    /// Which world: `default` (the README tables' mix, same bytes per seed) or `wide`
+    /// Which world: `default` (the mix of the tables in docs/results.md, same bytes per seed) or `wide`
     /// (ceilings, overhangs, reconstructed and subsampled clouds, pitched cameras, dressed
-    /// beds, new furniture; README "Synthetic data").
+    /// beds, new furniture; docs/formats.md "Synthetic data").
     #[arg(long, default_value = "default", value_parser = ["default", "wide"])]
     mix: String,
     /// Frame of the written clouds: `world` (z up, floor at 0) or `camera` (each scene in
@@ -342,7 +342,7 @@ fn parse_voxel(s: &str) -> Result<f64, String> {
 
 /// Runs the command line on `args` (the program name first, as `std::env::args_os`
 /// gives them) and returns the process exit code: 0 when everything was done, 2 when
-/// anything failed (README "Batch runs").
+/// anything failed (docs/batch.md).
 pub fn main<I, T>(args: I) -> u8
 where
     I: IntoIterator<Item = T>,

@@ -1,4 +1,4 @@
-//! Evaluation against a `labels.csv` (README, "Outputs"): runs
+//! Evaluation against a `labels.csv` (docs/formats.md, "Outputs"): runs
 //! detection on every labelled file at one or more body heights and scores the scene-level
 //! answers (a file affords F when any detection does) per affordance id, as in Table 1 of
 //! the paper (F-score, precision, recall per affordance and body height).

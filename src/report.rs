@@ -1,4 +1,4 @@
-//! Outputs (see "Interfaces others depend on" in README): JSON per run, detections CSV,
+//! Outputs (docs/formats.md): JSON per run, detections CSV,
 //! summary CSV, segments PLY, and a short human-readable table. Every file is written to a
 //! temporary file beside it and renamed into place, so nothing half-written is left.
 //!

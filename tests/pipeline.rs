@@ -82,7 +82,7 @@ fn a_high_back_chair_adds_a_headrest() {
 #[test]
 fn a_stool_against_a_wall_affords_a_backrest() {
     // The paper's own example: the stool's seat edge 5 cm from the wall behind it. The
-    // wall reaches far above the seat, so by the headrest convention (README) leaning the
+    // wall reaches far above the seat, so by the headrest convention (docs/conventions.md) leaning the
     // head back against it counts as a headrest too; the wall beside the arms is no armrest.
     let s = StoolParams::default();
     let wall_x = -(s.seat_size / 2.0 + 0.05);

@@ -2,7 +2,7 @@
 """Rebuilds the real-scan development set described by data/real/realset.csv.
 
 Each row of the CSV is one labelled cloud (labels in the shape `afford eval` reads, scene
-level, README "Conventions") with its provenance (`source_repo`, `source_path`, `commit`,
+level, docs/conventions.md) with its provenance (`source_repo`, `source_path`, `commit`,
 `licence`) and how it is made:
 
 - kind `pcd` / `ply`: the file is fetched and run through

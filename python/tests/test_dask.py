@@ -1,4 +1,4 @@
-"""The README's Dask recipe, run on a local dask.distributed cluster of two worker
+"""The Dask recipe of docs/python.md, run on a local dask.distributed cluster of two worker
 processes over a folder of clouds: its summary equals the CLI's --summary of the folder."""
 
 import glob
@@ -12,7 +12,7 @@ from conftest import write_ply
 
 
 def summary_with_dask(folder: str, client: Client) -> str:
-    # The README's recipe (section "Python", "On a cluster").
+    # The recipe of docs/python.md ("On a cluster").
     files = sorted(glob.glob(os.path.join(folder, "*.ply")))
     futures = client.map(afford.detect_file, files, threads=1)
     results = client.gather(futures)

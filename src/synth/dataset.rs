@@ -1,6 +1,6 @@
 //! Labelled synthetic datasets: varied furniture, rendered as full models or depth views,
 //! written as PLY (binary, with a per-point `part` property) or PCD files plus a
-//! `labels.csv` in the format of README ("Outputs"):
+//! `labels.csv` in the format of docs/formats.md:
 //! `file,sitting,backrest,armrest,headrest,lying,kind,class,doubtful,points`, then the
 //! fine-grained lying columns `elongated_body,raised_body,stretched_legs,raised_legs`
 //! appended at the end so that readers of the older columns are unaffected.
@@ -982,7 +982,7 @@ pub fn recliner_labels(p: &ReclinerParams) -> Labels {
     let labels = Labels {
         sitting: (0.25..=0.55).contains(&p.seat_height),
         // A back reclined further than BACKREST_MAX_RECLINE_DEG from upright is for lying,
-        // not a backrest to sit against (README, Conventions).
+        // not a backrest to sit against (docs/conventions.md).
         backrest: p.back_rise() >= 0.25 && 90.0 - p.back_angle_deg <= BACKREST_MAX_RECLINE_DEG,
         armrest: p.arms && (0.12..=0.35).contains(&p.arm_height_above_seat),
         headrest: p.back_rise() >= 0.70,
@@ -1075,7 +1075,7 @@ pub struct DatasetSpec {
 /// Which world [`generate`] draws from (`afford synth --mix`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Mix {
-    /// The mix of the README tables and the regression set: the same seed and counts
+    /// The mix of the docs/results.md tables and the regression set: the same seed and counts
     /// write the same bytes as before the wide mix existed.
     #[default]
     Default,
@@ -1302,7 +1302,7 @@ pub(super) fn object_on_floor(
         ));
         // A seat against a wall: the wall reaches far above the seat within 0.15 m of its
         // back, so the head leaning back rests on it (headrest), and a backless seat gets
-        // it as its backrest (README, "Conventions").
+        // it as its backrest (docs/conventions.md).
         if labels.sitting && wall_backs(obj.class) {
             labels.backrest = true;
             labels.headrest = true;
@@ -1315,7 +1315,7 @@ pub(super) fn object_on_floor(
 }
 
 /// Whether a wall close behind an object of `class` is its backrest and headrest (the
-/// wall rule of README "Conventions"): not for beds, whose head end stands at the wall;
+/// wall rule of docs/conventions.md): not for beds, whose head end stands at the wall;
 /// one sits on a bed's side edge, so the wall (like the headboard) is beside the body.
 pub(super) fn wall_backs(class: Class) -> bool {
     !matches!(class, Class::Bed | Class::BunkBed)
@@ -1462,7 +1462,7 @@ pub(super) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SynthError +
     }
 }
 
-/// Writes a labels file with the README ("Outputs") columns plus `kind,class,doubtful,points` and
+/// Writes a labels file with the docs/formats.md columns plus `kind,class,doubtful,points` and
 /// the fine-grained lying columns (see the module documentation), then a `frame` column
 /// (`world` or `camera`) when any row names its frame.
 pub fn write_labels(path: &Path, rows: &[LabelRow]) -> Result<(), SynthError> {

@@ -16,7 +16,7 @@
 //!   read as points; half of the depth views are subsampled to 20k–50k points.
 //! * Cameras look [`PITCH_DEG`] down at the object (the default mix: mostly 10–25°).
 //!
-//! Labels follow README "Conventions", including the rules this world forced
+//! Labels follow docs/conventions.md, including the rules this world forced
 //! (toilets, night stands, headboards, bunk beds, chairs under tables, things on seats);
 //! the constants below carry them. World frame as everywhere in [`super`]: metres, z up,
 //! floor at z = 0, seating furniture facing +x.
@@ -69,10 +69,10 @@ pub const WIDE_CLASSES: [Class; 25] = [
 pub const SITTING_HEIGHT_M: f64 = 0.91;
 /// Free depth between a chair's back and the edge of the table it is pushed under, metres:
 /// the trunk of the 1.75 m adult (~0.25 m) and a little room; chairs are pushed in no
-/// further, so they afford sitting as they stand (README "Conventions").
+/// further, so they afford sitting as they stand (docs/conventions.md).
 pub const TRUNK_CLEARANCE_M: f64 = 0.30;
 /// Highest top above the seat of something beside the body that can be an armrest, metres
-/// (the armrest band's top, README "Conventions"): headboards of the wide mix rise above
+/// (the armrest band's top, docs/conventions.md): headboards of the wide mix rise above
 /// it, so they are beside the elbow, never under the forearm.
 pub const ARMREST_BAND_TOP_M: f64 = 0.35;
 /// Highest night-stand top labelled `doubtful` (sittable by geometry, negative by
@@ -402,7 +402,7 @@ pub struct ToiletParams {
 pub const TOILET_LID_RISE_M: f64 = 0.42;
 
 impl ToiletParams {
-    /// Whether the toilet has a backrest (README "Conventions"): the tank or the raised
+    /// Whether the toilet has a backrest (docs/conventions.md): the tank or the raised
     /// lid rises at least 0.25 m above the seat ring within 0.15 m behind its rear edge
     /// (the lower back of the 1.75 m adult leaning back at most 35° meets it).
     pub fn backrest(&self) -> bool {
@@ -497,7 +497,7 @@ pub(super) fn toilet_object(rng: &mut ChaCha8Rng) -> Built {
 }
 
 /// A night stand: a small cabinet 0.45–0.70 m high, sometimes a lamp on it. Never
-/// labelled sitting (README "Conventions"); `doubtful` when its top is free and at most
+/// labelled sitting (docs/conventions.md); `doubtful` when its top is free and at most
 /// [`NIGHT_STAND_DOUBT_MAX_M`] high.
 fn night_stand(rng: &mut ChaCha8Rng) -> (Mesh, f64, Option<String>, f64, f64) {
     let p = CabinetParams {
@@ -676,7 +676,7 @@ fn dressed_bed_object(rng: &mut ChaCha8Rng) -> Built {
 /// A bunk bed: the lower bunk's mattress 0.32–0.45 m high, the upper bunk's frame
 /// [`SITTING_HEIGHT_M`] + 0.04–0.20 m above it (one sits upright on the lower bunk's
 /// edge), corner posts, head panels and guard rails round the upper bunk. The upper
-/// mattress (1.4–1.8 m high) is beyond the lying height band (README "Conventions") and
+/// mattress (1.4–1.8 m high) is beyond the lying height band (docs/conventions.md) and
 /// labelled [`Part::Other`]; labels: sitting and lying flat (the lower bunk).
 pub(super) fn bunk_bed_object(rng: &mut ChaCha8Rng) -> Built {
     let (hx, hy) = (u(rng, 1.9, 2.0) / 2.0, u(rng, 0.9, 1.0) / 2.0);
@@ -859,7 +859,7 @@ pub(super) fn bench_under_shelf_object(rng: &mut ChaCha8Rng) -> Built {
 
 /// Puts something on the seat (or lying surface) of `m`: a bag at one end when the seat
 /// is at least [`BAG_MIN_SEAT_M`] long, else a flat stack of books (at most
-/// [`FLAT_THING_MAX_M`] high). Either way a person still sits there (README "Conventions"),
+/// [`FLAT_THING_MAX_M`] high). Either way a person still sits there (docs/conventions.md),
 /// so labels do not change. Things are [`Part::Other`].
 fn put_thing_on_seat(m: &mut Mesh, rng: &mut ChaCha8Rng) {
     let Some((x0, x1, y0, y1, ztop)) = part_extent(m, &[Part::Seat, Part::LyingSurface]) else {
