@@ -182,7 +182,7 @@ class Result:
 
     def to_json(self) -> str:
         """The ``--json`` document of this input, byte for byte as the command line
-        writes it (``{"version": 2, "files": [...]}``, numbers rounded)."""
+        writes it (``{"version": 4, "files": [...]}``, numbers rounded)."""
         return to_json([self])
 
     def to_dict(self) -> Dict[str, Any]:
