@@ -9,7 +9,7 @@ use nalgebra::{Point3, Vector3};
 use crate::agent::Cylinder;
 use crate::cloud::{CloudError, Scalar};
 use crate::detect::Detection;
-use crate::render::{affordance_colour, finest_affordance};
+use crate::render::Legend;
 
 /// Segments around the circumference of every body part in [`agent_mesh_ply`].
 pub const SEGMENTS: usize = 16;
@@ -75,11 +75,11 @@ fn header(vertices: usize, faces: usize, detections: usize) -> String {
 }
 
 /// The bytes of the binary PLY written by [`agent_mesh_ply`].
-pub fn agent_mesh_bytes(detections: &[Detection]) -> Vec<u8> {
+pub fn agent_mesh_bytes(detections: &[Detection], legend: &Legend) -> Vec<u8> {
     let mut verts: Vec<(Point3<f64>, [u8; 3])> = Vec::new();
     let mut faces: Vec<[u32; 3]> = Vec::new();
     for d in detections {
-        let colour = affordance_colour(&d.affordances);
+        let colour = legend.colour(&d.affordances);
         for c in &d.parts {
             let (v, f) = cylinder_mesh(c, SEGMENTS);
             let base = verts.len() as u32;
@@ -108,10 +108,14 @@ pub fn agent_mesh_bytes(detections: &[Detection]) -> Vec<u8> {
 /// triangle mesh (vertex `x, y, z` float in metres, world frame, and `red, green, blue`
 /// uchar; face `list uchar int vertex_indices`): each part a capped cylinder of
 /// [`SEGMENTS`] sides ([`cylinder_mesh`]), coloured by its detection's finest
-/// affordance ([`affordance_colour`], the palette of the pictures). The file is written
+/// affordance ([`Legend::colour`], the legend of the pictures). The file is written
 /// to a temporary file in the same directory and renamed into place.
-pub fn agent_mesh_ply(detections: &[Detection], path: &Path) -> std::io::Result<()> {
-    crate::atomic::write_bytes(path, &agent_mesh_bytes(detections))
+pub fn agent_mesh_ply(
+    detections: &[Detection],
+    legend: &Legend,
+    path: &Path,
+) -> std::io::Result<()> {
+    crate::atomic::write_bytes(path, &agent_mesh_bytes(detections, legend))
 }
 
 /// Colour of the points in no detection's segment in [`segments_ply`].
@@ -119,9 +123,10 @@ pub const UNLABELLED: [u8; 3] = [128, 128, 128];
 
 /// The `affordance` code of a detection in [`segments_ply`]: 1 + the index in `ids` (the
 /// hierarchy's affordance ids, in node order) of its finest affordance
-/// ([`finest_affordance`], the one its colour shows); 0 for none.
-pub fn affordance_code(d: &Detection, ids: &[String]) -> usize {
-    finest_affordance(&d.affordances)
+/// ([`Legend::finest`], the one its colour shows); 0 for none.
+pub fn affordance_code(d: &Detection, ids: &[String], legend: &Legend) -> usize {
+    legend
+        .finest(&d.affordances)
         .and_then(|f| ids.iter().position(|id| id == f))
         .map_or(0, |i| i + 1)
 }
@@ -139,14 +144,15 @@ pub fn segments_ply(
     detections: &[Detection],
     labels: &[Option<usize>],
     ids: &[String],
+    legend: &Legend,
     path: &Path,
 ) -> Result<(), CloudError> {
     let per_detection: Vec<(f64, [u8; 3])> = detections
         .iter()
         .map(|d| {
             (
-                affordance_code(d, ids) as f64,
-                affordance_colour(&d.affordances),
+                affordance_code(d, ids, legend) as f64,
+                legend.colour(&d.affordances),
             )
         })
         .collect();
@@ -250,7 +256,9 @@ mod tests {
                 vec![cyl([1.0, 0.0, 0.0], [1.0, 0.0, 0.3], 0.05)],
             ),
         ];
-        let bytes = agent_mesh_bytes(&ds);
+        let legend = crate::render::builtin_legend();
+        let colour = |id: &str| legend.entries().iter().find(|(e, _)| e == id).unwrap().1;
+        let bytes = agent_mesh_bytes(&ds, &legend);
         let text_end = bytes
             .windows(11)
             .position(|w| w == b"end_header\n")
@@ -266,10 +274,10 @@ mod tests {
         let body = &bytes[text_end..];
         let z = f32::from_le_bytes(body[8..12].try_into().unwrap());
         assert!(z.abs() < 1e-6);
-        assert_eq!(&body[12..15], &crate::render::AFFORDANCE_LEGEND[1].1);
+        assert_eq!(body[12..15], colour("backrest"));
         // Last vertex belongs to the second detection: "sitting" colour.
         let last = &body[15 * (nv - 1)..15 * nv];
-        assert_eq!(&last[12..15], &crate::render::AFFORDANCE_LEGEND[0].1);
+        assert_eq!(last[12..15], colour("sitting"));
         // Faces: count byte 3 and indices inside the vertex range.
         let faces = &body[15 * nv..];
         for f in faces.chunks(13) {
@@ -300,7 +308,16 @@ mod tests {
         let points: Vec<_> = (0..5).map(|i| Point3::new(i as f64, 0.5, -0.25)).collect();
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("seg.ply");
-        segments_ply(&points, &outcome.detections, &outcome.labels, &ids, &path).unwrap();
+        let palette = crate::render::builtin_legend();
+        segments_ply(
+            &points,
+            &outcome.detections,
+            &outcome.labels,
+            &ids,
+            &palette,
+            &path,
+        )
+        .unwrap();
 
         // Our own reader: the points, and every field by name.
         let got = crate::cloud::read_ply(&path).unwrap();
@@ -346,13 +363,7 @@ mod tests {
                 ref p => panic!("{k}: {p:?}"),
             })
         };
-        let legend = |id: &str| {
-            crate::render::AFFORDANCE_LEGEND
-                .iter()
-                .find(|(l, _)| *l == id)
-                .unwrap()
-                .1
-        };
+        let legend = |id: &str| palette.entries().iter().find(|(l, _)| l == id).unwrap().1;
         let want = [
             legend("headrest"),
             UNLABELLED,
@@ -365,10 +376,13 @@ mod tests {
         assert_eq!(v[1]["detection"], Property::Int(-1));
         assert_eq!(v[0]["affordance"], Property::Int(4));
         // The mesh of the same detections carries the same colours.
-        let mesh = agent_mesh_bytes(&[detection(
-            &["sitting", "armrest", "backrest"],
-            vec![cyl([0.0; 3], [0.0, 0.0, 0.3], 0.05)],
-        )]);
+        let mesh = agent_mesh_bytes(
+            &[detection(
+                &["sitting", "armrest", "backrest"],
+                vec![cyl([0.0; 3], [0.0, 0.0, 0.3], 0.05)],
+            )],
+            &palette,
+        );
         let body = mesh.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
         assert_eq!(mesh[body + 12..body + 15], legend("armrest"));
     }
@@ -377,16 +391,21 @@ mod tests {
     fn writes_atomically_and_empty_is_valid() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("agents.ply");
-        agent_mesh_ply(&[], &path).unwrap();
+        agent_mesh_ply(&[], &Legend::default(), &path).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         let head = String::from_utf8(bytes.clone()).unwrap();
         assert!(head.contains("element vertex 0\n") && head.contains("element face 0\n"));
         assert!(head.ends_with("end_header\n"));
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
-        assert!(agent_mesh_ply(&[], &dir.path().join("missing/agents.ply")).is_err());
+        assert!(agent_mesh_ply(
+            &[],
+            &Legend::default(),
+            &dir.path().join("missing/agents.ply")
+        )
+        .is_err());
         // The project's own PLY reader accepts the mesh and finds its vertices.
         let d = detection(&["sitting"], vec![cyl([0.0; 3], [0.0, 0.0, 0.5], 0.1)]);
-        agent_mesh_ply(&[d], &path).unwrap();
+        agent_mesh_ply(&[d], &Legend::default(), &path).unwrap();
         let pts = crate::cloud::read_ply(&path).unwrap();
         assert_eq!(pts.len(), 2 * SEGMENTS + 2);
         assert!(pts.iter().all(|p| p.z >= -1e-6 && p.z <= 0.5 + 1e-6));

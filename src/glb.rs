@@ -3,7 +3,7 @@
 //!
 //! Every detection is one named node (`detection 3: sitting, backrest`) holding one
 //! triangle mesh of its body parts ([`crate::agent_mesh::cylinder_mesh`]) with one
-//! material in its affordance colour ([`crate::render::affordance_colour`], the palette
+//! material in its affordance colour ([`crate::render::Legend`], the palette
 //! of the pictures and of the PLY mesh); the node's `extras` carry the detection's
 //! numbers. The scene's points, when asked for, are one more node of `POINTS` whose
 //! `COLOR_0` is the colour of the detection whose segment holds each point (grey for none,
@@ -17,7 +17,7 @@ use serde_json::{json, Value};
 
 use crate::agent_mesh::{cylinder_mesh, SEGMENTS, UNLABELLED};
 use crate::detect::Detection;
-use crate::render::{affordance_colour, finest_affordance};
+use crate::render::Legend;
 
 /// Name of the root node, which turns the world frame (z up) into glTF's (y up).
 pub const ROOT_NAME: &str = "afford (world frame, z up)";
@@ -119,19 +119,24 @@ fn round(x: f64, d: i32) -> f64 {
 
 /// The bytes of the `.glb` of `detections` found in `file`; with `points` (the cloud, and
 /// per point the detection whose segment holds it), the cloud as coloured points too.
-pub fn agents_glb(file: &str, detections: &[Detection], points: Option<ScenePoints>) -> Vec<u8> {
+pub fn agents_glb(
+    file: &str,
+    detections: &[Detection],
+    legend: &Legend,
+    points: Option<ScenePoints>,
+) -> Vec<u8> {
     let mut b = Builder::default();
     let mut materials: Vec<Value> = Vec::new();
     let mut material_of: Vec<[u8; 3]> = Vec::new();
     let mut meshes = Vec::new();
     let mut nodes = vec![Value::Null];
     for (i, d) in detections.iter().enumerate() {
-        let colour = affordance_colour(&d.affordances);
+        let colour = legend.colour(&d.affordances);
         let m = match material_of.iter().position(|c| *c == colour) {
             Some(m) => m,
             None => {
                 materials.push(material(
-                    finest_affordance(&d.affordances).unwrap_or("none"),
+                    legend.finest(&d.affordances).unwrap_or("none"),
                     colour,
                 ));
                 material_of.push(colour);
@@ -176,7 +181,7 @@ pub fn agents_glb(file: &str, detections: &[Detection], points: Option<ScenePoin
     if let Some((pts, labels)) = points.filter(|(p, _)| !p.is_empty()) {
         let colours: Vec<[u8; 3]> = detections
             .iter()
-            .map(|d| affordance_colour(&d.affordances))
+            .map(|d| legend.colour(&d.affordances))
             .collect();
         let verts: Vec<[f32; 3]> = pts
             .iter()
@@ -260,9 +265,10 @@ pub fn write_agents_glb(
     path: &Path,
     file: &str,
     detections: &[Detection],
+    legend: &Legend,
     points: Option<ScenePoints>,
 ) -> std::io::Result<()> {
-    crate::atomic::write_bytes(path, &agents_glb(file, detections, points))
+    crate::atomic::write_bytes(path, &agents_glb(file, detections, legend, points))
 }
 
 #[cfg(test)]
@@ -278,7 +284,7 @@ mod tests {
 
     #[test]
     fn empty_is_a_valid_header_and_json_chunk() {
-        let g = agents_glb("x.ply", &[], None);
+        let g = agents_glb("x.ply", &[], &Legend::default(), None);
         assert_eq!(&g[..4], b"glTF");
         assert_eq!(
             u32::from_le_bytes(g[8..12].try_into().unwrap()) as usize,

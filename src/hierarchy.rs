@@ -214,7 +214,25 @@ pub struct Hierarchy {
     pub initial: Posture,
     /// Nodes, parents before children; node 0 is the root.
     pub nodes: Vec<Node>,
+    /// How detections are drawn (pictures, meshes, segment files): affordance ids with
+    /// their sRGB colours, coarsest first; a detection takes the colour of the last entry
+    /// it affords. From the file's `legend`, or, without one, every node in node order
+    /// with the colours of [`NODE_PALETTE`].
+    pub legend: Vec<(String, [u8; 3])>,
 }
+
+/// Colours given to the nodes of a hierarchy file that has no `legend`, in node order
+/// (cycled): distinct hues that read on white and on the height map's viridis.
+pub const NODE_PALETTE: [[u8; 3]; 8] = [
+    [255, 140, 0],
+    [225, 35, 150],
+    [40, 160, 255],
+    [120, 230, 40],
+    [140, 80, 220],
+    [230, 200, 0],
+    [0, 185, 185],
+    [170, 110, 60],
+];
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -227,6 +245,16 @@ struct File {
     score: ScoreFile,
     initial_pose: BTreeMap<String, f64>,
     node: Vec<NodeFile>,
+    #[serde(default)]
+    legend: Vec<LegendFile>,
+}
+
+/// One entry of the file's `legend`: an affordance id and its colour (sRGB, 0-255).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LegendFile {
+    id: String,
+    colour: [u8; 3],
 }
 
 #[derive(Deserialize)]
@@ -375,6 +403,7 @@ impl Hierarchy {
             .into_iter()
             .map(|(i, parent)| resolve_node(&file.node[i], &key(i), parent, &names))
             .collect::<Result<Vec<_>, _>>()?;
+        let legend = resolve_legend(&file, src, &nodes)?;
         let f = &file.fit;
         Ok(Hierarchy {
             name: file.name,
@@ -403,6 +432,7 @@ impl Hierarchy {
             suppression_radius: file.suppression_radius,
             initial,
             nodes,
+            legend,
         })
     }
 
@@ -410,6 +440,34 @@ impl Hierarchy {
     pub fn ids(&self) -> Vec<&str> {
         self.nodes.iter().map(|n| n.id.as_str()).collect()
     }
+}
+
+/// The hierarchy's legend: the file's `legend` (every id a node's, none twice), or every
+/// node in node order with the colours of [`NODE_PALETTE`].
+fn resolve_legend(
+    file: &File,
+    src: Source,
+    nodes: &[Node],
+) -> Result<Vec<(String, [u8; 3])>, ModelError> {
+    if file.legend.is_empty() {
+        return Ok(nodes
+            .iter()
+            .zip(NODE_PALETTE.iter().cycle())
+            .map(|(n, c)| (n.id.clone(), *c))
+            .collect());
+    }
+    let mut legend: Vec<(String, [u8; 3])> = Vec::with_capacity(file.legend.len());
+    for (i, e) in file.legend.iter().enumerate() {
+        let key = Key::top("legend").item(i, &e.id).key("id");
+        if !nodes.iter().any(|n| n.id == e.id) {
+            return Err(src.invalid(&key, format!("`{}` is not the id of a node", e.id)));
+        }
+        if legend.iter().any(|(id, _)| *id == e.id) {
+            return Err(src.invalid(&key, format!("`{}` is listed twice", e.id)));
+        }
+        legend.push((e.id.clone(), e.colour));
+    }
+    Ok(legend)
 }
 
 /// What a number of the hierarchy file must be.
@@ -899,6 +957,46 @@ mod tests {
     }
 
     #[test]
+    fn the_legend_comes_from_the_file_or_the_node_palette() {
+        let h = load(BUILTIN_SITTING).unwrap();
+        let ids: Vec<&str> = h.legend.iter().map(|(id, _)| id.as_str()).collect();
+        // As listed in the file (armrest after backrest: drawn over it), not node order.
+        assert_eq!(ids, ["sitting", "backrest", "armrest", "headrest"]);
+        assert_eq!(h.legend[0].1, [255, 140, 0]);
+        // Without a legend every node gets a palette colour, in node order.
+        let start = BUILTIN_SITTING.find("legend = [").unwrap();
+        let end = start + BUILTIN_SITTING[start..].find("]\n\n").unwrap() + 2;
+        let bare = format!("{}{}", &BUILTIN_SITTING[..start], &BUILTIN_SITTING[end..]);
+        let h = load(&bare).unwrap();
+        let want: Vec<(String, [u8; 3])> = h
+            .ids()
+            .iter()
+            .zip(NODE_PALETTE)
+            .map(|(id, c)| (id.to_string(), c))
+            .collect();
+        assert_eq!(h.legend, want);
+    }
+
+    #[test]
+    fn a_legend_entry_names_a_node_once_with_bytes() {
+        let (e, line) = edited(
+            r#"{ id = "headrest", colour = [120, 230, 40] }"#,
+            r#"{ id = "footrest", colour = [120, 230, 40] }"#,
+        );
+        names(&e, line, "legend.footrest.id", "not the id of a node");
+        let (e, line) = edited(
+            r#"{ id = "headrest", colour = [120, 230, 40] }"#,
+            r#"{ id = "sitting", colour = [120, 230, 40] }"#,
+        );
+        names(&e, line, "legend.sitting.id", "listed twice");
+        let (e, _) = edited(
+            r#"{ id = "headrest", colour = [120, 230, 40] }"#,
+            r#"{ id = "headrest", colour = [120, 230, 400] }"#,
+        );
+        assert!(e.starts_with("h.toml:") && e.contains("legend"), "{e}");
+    }
+
+    #[test]
     fn every_built_in_sweep_turns_about_its_joints_own_axis() {
         // One sign convention: a hip flexed 90 deg is +90 in sitting and in lying alike.
         let a = agent();
@@ -965,10 +1063,12 @@ mod tests {
 
     #[test]
     fn a_duplicate_node_id_is_named_where_repeated() {
-        let bad = BUILTIN_SITTING.replace("id = \"armrest\"", "id = \"backrest\"");
+        // The node's line (at the start of a line), not the legend's entry.
+        let bad = BUILTIN_SITTING.replace("\nid = \"armrest\"", "\nid = \"backrest\"");
         names(
             &error(&bad),
-            line_of(&bad, "id = \"backrest\"", 1),
+            // The legend's entry, the backrest node, then the repeat.
+            line_of(&bad, "id = \"backrest\"", 2),
             "node.backrest.id",
             "duplicate node id",
         );

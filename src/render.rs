@@ -12,6 +12,7 @@ use nalgebra::{Point2, Point3, Vector3};
 use crate::cloud::PointCloud;
 use crate::detect::{Detection, Outcome, Prepared};
 use crate::heightmap::HeightMap;
+use crate::hierarchy::Hierarchy;
 use crate::hypotheses::Hypothesis;
 
 /// An RGB image, 8 bits per channel, row-major from the top-left corner.
@@ -25,18 +26,7 @@ pub struct Image {
     pub rgb: Vec<u8>,
 }
 
-/// The fine-grained affordances drawn with their own colour, coarsest first.
-pub const AFFORDANCE_LEGEND: [(&str, [u8; 3]); 7] = [
-    ("sitting", [255, 140, 0]),
-    ("backrest", [225, 35, 150]),
-    ("armrest", [40, 160, 255]),
-    ("headrest", [120, 230, 40]),
-    ("lying", [140, 80, 220]),
-    ("raised_legs", [230, 200, 0]),
-    ("raised_body", [0, 185, 185]),
-];
-
-/// Colour of a detection with affordances that are none of [`AFFORDANCE_LEGEND`].
+/// Colour of a detection with affordances that are none of its [`Legend`]'s.
 pub const OTHER_AFFORDANCE: [u8; 3] = [160, 160, 160];
 
 /// Colour of hypothesis arrows (Fig. 4c).
@@ -54,26 +44,59 @@ const SEAT_RADIUS: f64 = 0.10;
 /// Length of the heading arrow of a detection, metres.
 const HEADING_LENGTH: f64 = 0.30;
 
-/// The finest affordance in `affordances` (ids of one detection, in hierarchy order): the
-/// one latest in [`AFFORDANCE_LEGEND`] (headrest over armrest over backrest over sitting;
-/// raised body over raised legs over lying flat), else the last one; `None` for none.
-pub fn finest_affordance(affordances: &[String]) -> Option<&str> {
-    AFFORDANCE_LEGEND
-        .iter()
-        .rev()
-        .find_map(|(id, _)| affordances.iter().find(|a| a == id))
-        .or(affordances.last())
-        .map(String::as_str)
+/// How detections are coloured: affordance ids with their sRGB colours, coarsest first,
+/// gathered from the legends of the hierarchies in use ([`Hierarchy::legend`]), so a new
+/// hierarchy draws in its own colours.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Legend {
+    entries: Vec<(String, [u8; 3])>,
 }
 
-/// The colour of the finest affordance in `affordances` ([`finest_affordance`]) from
-/// [`AFFORDANCE_LEGEND`]; [`OTHER_AFFORDANCE`] if it is not in the legend.
-pub fn affordance_colour(affordances: &[String]) -> [u8; 3] {
-    let finest = finest_affordance(affordances);
-    AFFORDANCE_LEGEND
-        .iter()
-        .find(|(id, _)| Some(*id) == finest)
-        .map_or(OTHER_AFFORDANCE, |(_, c)| *c)
+impl Legend {
+    /// The legend of `entries` (id and colour, coarsest first).
+    pub fn new(entries: Vec<(String, [u8; 3])>) -> Legend {
+        Legend { entries }
+    }
+
+    /// The legends of `hierarchies` one after the other; an id already listed keeps its
+    /// first colour.
+    pub fn of<'a>(hierarchies: impl IntoIterator<Item = &'a Hierarchy>) -> Legend {
+        let mut entries: Vec<(String, [u8; 3])> = Vec::new();
+        for (id, c) in hierarchies.into_iter().flat_map(|h| &h.legend) {
+            if !entries.iter().any(|(e, _)| e == id) {
+                entries.push((id.clone(), *c));
+            }
+        }
+        Legend { entries }
+    }
+
+    /// The ids and colours, coarsest first.
+    pub fn entries(&self) -> &[(String, [u8; 3])] {
+        &self.entries
+    }
+
+    /// The finest affordance in `affordances` (ids of one detection, in hierarchy order):
+    /// the one latest in the legend (for the built-in hierarchies, headrest over armrest
+    /// over backrest over sitting; raised body over raised legs over lying flat), else the
+    /// last one; `None` for none.
+    pub fn finest<'a>(&self, affordances: &'a [String]) -> Option<&'a str> {
+        self.entries
+            .iter()
+            .rev()
+            .find_map(|(id, _)| affordances.iter().find(|a| *a == id))
+            .or(affordances.last())
+            .map(String::as_str)
+    }
+
+    /// The colour of the finest affordance in `affordances` ([`Self::finest`]);
+    /// [`OTHER_AFFORDANCE`] if it is not in the legend.
+    pub fn colour(&self, affordances: &[String]) -> [u8; 3] {
+        let finest = self.finest(affordances);
+        self.entries
+            .iter()
+            .find(|(id, _)| Some(id.as_str()) == finest)
+            .map_or(OTHER_AFFORDANCE, |(_, c)| *c)
+    }
 }
 
 /// Viridis, approximated by 9 stops; `t` in `0..=1` (clamped), dark purple to yellow.
@@ -338,7 +361,7 @@ fn glyph(c: char) -> Option<[u8; 7]> {
 /// are red arrows from their cell centre along their heading, of length `availability`
 /// times 1.5 cells (a dot for no heading). Each detection shows the top-view silhouette
 /// of its posed body parts, a circle around its seat and a heading arrow, in the colour
-/// of its finest affordance ([`affordance_colour`]).
+/// of its finest affordance ([`Legend::colour`]).
 ///
 /// The image is `max(nx * scale, LEGEND_MIN_WIDTH)` wide and `ny * scale +
 /// LEGEND_HEIGHT` tall: a legend strip (height range, affordance colours) is at the bottom.
@@ -346,6 +369,7 @@ pub fn heightmap_image(
     map: &HeightMap,
     hyps: &[Hypothesis],
     detections: &[Detection],
+    legend: &Legend,
     scale: u32,
 ) -> Image {
     let scale = scale.max(1);
@@ -377,7 +401,7 @@ pub fn heightmap_image(
     let px_per_m = s / map.cell;
     let thin = (s / 16.0).max(0.5);
     for d in detections {
-        let col = affordance_colour(&d.affordances);
+        let col = legend.colour(&d.affordances);
         let segs: Vec<(Point2<f64>, Point2<f64>, f64)> = d
             .parts
             .iter()
@@ -419,7 +443,7 @@ pub fn heightmap_image(
         }
     }
     for (i, d) in detections.iter().enumerate() {
-        let col = affordance_colour(&d.affordances);
+        let col = legend.colour(&d.affordances);
         let seat = to_px(d.seat.x, d.seat.y);
         let tip =
             seat + nalgebra::Vector2::new(d.yaw.cos(), -d.yaw.sin()) * HEADING_LENGTH * px_per_m;
@@ -448,11 +472,11 @@ pub fn heightmap_image(
         }
         img.text(lx, ly, &label, 2, [255; 3]);
     }
-    draw_legend(&mut img, mh as i64, lo, hi);
+    draw_legend(&mut img, mh as i64, lo, hi, legend);
     img
 }
 
-fn draw_legend(img: &mut Image, top: i64, lo: f64, hi: f64) {
+fn draw_legend(img: &mut Image, top: i64, lo: f64, hi: f64, legend: &Legend) {
     let y = top + 4;
     let mut x = 4;
     if lo.is_finite() {
@@ -471,7 +495,8 @@ fn draw_legend(img: &mut Image, top: i64, lo: f64, hi: f64) {
     img.text(x + 16, y, "hypothesis", 1, INK);
     let mut y = top + 20;
     let mut x = 4;
-    for (id, c) in AFFORDANCE_LEGEND {
+    for (id, c) in legend.entries() {
+        let c = *c;
         // Wrap to a second row when the entry (box and ~6 px per letter) would not fit.
         if x + 12 + 6 * id.len() as i64 > i64::from(img.width) {
             x = 4;
@@ -530,6 +555,7 @@ impl View {
 pub fn scene_image(
     cloud: &PointCloud,
     detections: &[Detection],
+    legend: &Legend,
     view: View,
     width: u32,
     height: u32,
@@ -604,7 +630,7 @@ pub fn scene_image(
     // Light from the upper left, towards the scene, in camera coordinates (right, up, back).
     let light = Vector3::new(-0.45, 0.55, 0.7).normalize();
     for d in detections {
-        let col = affordance_colour(&d.affordances);
+        let col = legend.colour(&d.affordances);
         for c in &d.parts {
             let (sa, ta, da) = proj(&c.a);
             let (sb, tb, db) = proj(&c.b);
@@ -686,6 +712,7 @@ pub fn inspect_png(
     prepared: &Prepared,
     hyps: &[Hypothesis],
     outcome: &Outcome,
+    legend: &Legend,
     path: &Path,
 ) -> std::io::Result<()> {
     let map = &prepared.map;
@@ -693,12 +720,23 @@ pub fn inspect_png(
         map,
         hyps,
         &outcome.detections,
+        legend,
         auto_scale(map.nx, map.ny, 480),
     );
     let h = top.height.max(360);
-    let iso = scene_image(cloud, &outcome.detections, View::Iso, h, h);
-    let side = scene_image(cloud, &outcome.detections, View::Side, h, h);
+    let iso = scene_image(cloud, &outcome.detections, legend, View::Iso, h, h);
+    let side = scene_image(cloud, &outcome.detections, legend, View::Side, h, h);
     panel(&[top, iso, side]).save_png(path)
+}
+
+/// The legend of the built-in hierarchies (sitting, then lying) for the built-in human.
+#[cfg(test)]
+pub(crate) fn builtin_legend() -> Legend {
+    use crate::model_set::{load_set, sources, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
+    let agents = sources(&[], BUILTIN_AGENTS, &["human"]).unwrap();
+    let hierarchies = sources(&[], BUILTIN_HIERARCHIES, &["sitting", "lying"]).unwrap();
+    let models = load_set(&agents, &hierarchies, &[1.75]).unwrap();
+    Legend::of(models.iter().map(|m| &m.hierarchy))
 }
 
 #[cfg(test)]
@@ -753,7 +791,7 @@ mod tests {
     #[test]
     fn heightmap_image_size_colours_and_orientation() {
         let m = map_3x2();
-        let img = heightmap_image(&m, &[], &[], 10);
+        let img = heightmap_image(&m, &[], &[], &Legend::default(), 10);
         assert_eq!(img.width, LEGEND_MIN_WIDTH);
         assert_eq!(img.height, 20 + LEGEND_HEIGHT);
         assert_eq!(img.rgb.len(), 3 * (img.width * img.height) as usize);
@@ -773,7 +811,10 @@ mod tests {
             heights: vec![Some(0.3); 80],
             ..m
         };
-        assert_eq!(heightmap_image(&wide, &[], &[], 8).width, 320);
+        assert_eq!(
+            heightmap_image(&wide, &[], &[], &Legend::default(), 8).width,
+            320
+        );
     }
 
     fn is_red(c: [u8; 3]) -> bool {
@@ -791,7 +832,13 @@ mod tests {
             heights: vec![Some(0.0); 81],
         };
         // Heading 0 (+x): red to the right of the centre (45, 45), not to the left.
-        let img = heightmap_image(&m, &[hyp((4, 4), &m, Some(0.0))], &[], 10);
+        let img = heightmap_image(
+            &m,
+            &[hyp((4, 4), &m, Some(0.0))],
+            &[],
+            &Legend::default(),
+            10,
+        );
         assert!(is_red(img.pixel(52, 44)), "{:?}", img.pixel(52, 44));
         assert!(!is_red(img.pixel(38, 44)));
         // Heading +90 deg (+y): red above the centre in the image.
@@ -799,12 +846,13 @@ mod tests {
             &m,
             &[hyp((4, 4), &m, Some(std::f64::consts::FRAC_PI_2))],
             &[],
+            &Legend::default(),
             10,
         );
         assert!(is_red(img.pixel(44, 37)) || is_red(img.pixel(45, 37)));
         assert!(!is_red(img.pixel(45, 53)));
         // No heading: a dot on the centre.
-        let img = heightmap_image(&m, &[hyp((4, 4), &m, None)], &[], 10);
+        let img = heightmap_image(&m, &[hyp((4, 4), &m, None)], &[], &Legend::default(), 10);
         assert!(is_red(img.pixel(45, 45)));
         assert!(!is_red(img.pixel(52, 45)));
     }
@@ -812,35 +860,46 @@ mod tests {
     #[test]
     fn detection_drawn_in_its_finest_affordance_colour() {
         let strs = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let legend = builtin_legend();
+        let colour = |id: &str| {
+            legend
+                .entries()
+                .iter()
+                .find(|(e, _)| e == id)
+                .map(|(_, c)| *c)
+                .unwrap()
+        };
+        let drawn = |a: &[&str]| legend.colour(&strs(a));
+        assert_eq!(drawn(&["sitting"]), colour("sitting"));
         assert_eq!(
-            affordance_colour(&strs(&["sitting"])),
-            AFFORDANCE_LEGEND[0].1
+            drawn(&["sitting", "backrest", "headrest"]),
+            colour("headrest")
         );
         assert_eq!(
-            affordance_colour(&strs(&["sitting", "backrest", "headrest"])),
-            AFFORDANCE_LEGEND[3].1
+            drawn(&["sitting", "armrest", "backrest"]),
+            colour("armrest")
         );
         assert_eq!(
-            affordance_colour(&strs(&["sitting", "armrest", "backrest"])),
-            AFFORDANCE_LEGEND[2].1
+            drawn(&["lying", "elongated_body", "stretched_legs"]),
+            colour("lying")
         );
         assert_eq!(
-            affordance_colour(&strs(&["lying", "elongated_body", "stretched_legs"])),
-            AFFORDANCE_LEGEND[4].1
+            drawn(&["lying", "raised_body", "raised_legs"]),
+            colour("raised_body")
         );
-        assert_eq!(
-            affordance_colour(&strs(&["lying", "raised_body", "raised_legs"])),
-            AFFORDANCE_LEGEND[6].1
-        );
-        assert_eq!(affordance_colour(&strs(&["perching"])), OTHER_AFFORDANCE);
-        assert_eq!(affordance_colour(&[]), OTHER_AFFORDANCE);
-        let finest = |a: &[&str]| finest_affordance(&strs(a)).map(String::from);
+        assert_eq!(drawn(&["perching"]), OTHER_AFFORDANCE);
+        assert_eq!(drawn(&[]), OTHER_AFFORDANCE);
+        let finest = |a: &[&str]| legend.finest(&strs(a)).map(String::from);
         assert_eq!(
             finest(&["sitting", "armrest", "backrest"]).unwrap(),
             "armrest"
         );
         assert_eq!(finest(&["perching", "footrest"]).unwrap(), "footrest");
         assert_eq!(finest(&[]), None);
+        // A legend of its own (a new hierarchy) draws in its colours.
+        let own = Legend::new(vec![("perching".into(), [1, 2, 3])]);
+        assert_eq!(own.colour(&strs(&["perching"])), [1, 2, 3]);
+        assert_eq!(own.colour(&strs(&["sitting"])), OTHER_AFFORDANCE);
         let m = HeightMap {
             x0: -0.5,
             y0: -0.5,
@@ -850,11 +909,11 @@ mod tests {
             heights: vec![Some(0.0); 400],
         };
         let d = detection(&["sitting", "backrest"], vec![]);
-        let img = heightmap_image(&m, &[], &[d], 10);
+        let img = heightmap_image(&m, &[], &[d], &legend, 10);
         // Seat at the world origin = pixel (100, 100); the heading arrow runs to +x.
         let c = img.pixel(100 + 40, 100);
-        assert_eq!(c, AFFORDANCE_LEGEND[1].1, "{c:?}");
-        assert_ne!(img.pixel(100 - 40, 100), AFFORDANCE_LEGEND[1].1);
+        assert_eq!(c, colour("backrest"), "{c:?}");
+        assert_ne!(img.pixel(100 - 40, 100), colour("backrest"));
     }
 
     #[test]
@@ -872,8 +931,9 @@ mod tests {
             radius: 0.05,
         };
         let d = detection(&["sitting"], vec![part]);
+        let legend = builtin_legend();
         for view in [View::Top, View::Front, View::Side, View::Iso] {
-            let img = scene_image(&cloud, std::slice::from_ref(&d), view, 200, 150);
+            let img = scene_image(&cloud, std::slice::from_ref(&d), &legend, view, 200, 150);
             assert_eq!((img.width, img.height), (200, 150));
             let orange = img
                 .rgb
@@ -883,14 +943,28 @@ mod tests {
             assert!(orange > 20, "{view:?}: {orange} orange pixels");
         }
         // Top view: the part lies above the floor, so it hides the points under it.
-        let img = scene_image(&cloud, std::slice::from_ref(&d), View::Top, 200, 200);
+        let img = scene_image(
+            &cloud,
+            std::slice::from_ref(&d),
+            &legend,
+            View::Top,
+            200,
+            200,
+        );
         let c = img.pixel(100, 100);
         assert!(c[0] > 100 && c[2] < 60, "{c:?}");
         // Without detections the same pixel is a floor point.
-        let img = scene_image(&cloud, &[], View::Top, 200, 200);
+        let img = scene_image(&cloud, &[], &Legend::default(), View::Top, 200, 200);
         assert!(img.pixel(100, 100)[2] > img.pixel(100, 100)[1]);
         // Empty cloud: still an image of the asked size.
-        let img = scene_image(&PointCloud::default(), &[], View::Iso, 30, 20);
+        let img = scene_image(
+            &PointCloud::default(),
+            &[],
+            &Legend::default(),
+            View::Iso,
+            30,
+            20,
+        );
         assert_eq!(img.rgb.len(), 30 * 20 * 3);
     }
 
@@ -960,6 +1034,7 @@ mod demo {
             1.75,
         )
         .unwrap();
+        let legend = Legend::of([&h]);
         let cfg = DetectConfig::default();
         let scenes = [
             ("armchair", vec![synth::chair(&ChairParams::with_arms())]),
@@ -1039,11 +1114,12 @@ mod demo {
                 &prepared,
                 &hyps,
                 &out,
+                &legend,
                 Path::new(&format!("/tmp/render-{name}.png")),
             )
             .unwrap();
-            let front = scene_image(&cloud, &out.detections, View::Front, 500, 500);
-            let top = scene_image(&cloud, &out.detections, View::Top, 500, 500);
+            let front = scene_image(&cloud, &out.detections, &legend, View::Front, 500, 500);
+            let top = scene_image(&cloud, &out.detections, &legend, View::Top, 500, 500);
             panel(&[front, top])
                 .save_png(Path::new(&format!("/tmp/render-{name}-ft.png")))
                 .unwrap();

@@ -13,6 +13,7 @@ use crate::hierarchy::Hierarchy;
 use crate::input::{load_input, Input, InputOptions};
 use crate::model::ModelError;
 use crate::model_set::{Model, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
+use crate::render::Legend;
 use crate::report::{self, FileReport};
 use crate::settings::Settings;
 
@@ -549,9 +550,10 @@ fn detect_cloud(
         }
     };
     let part = input.part.as_deref();
+    let legend = Legend::of(models.iter().map(|m| &m.hierarchy));
     if let Some(base) = &req.segments {
         let target = per_part_path(base, path, part, several);
-        if let Err(e) = write_segments(input, &target, &r) {
+        if let Err(e) = write_segments(input, &target, &r, &legend) {
             done.errors.push(batch::printable(&e.to_string()));
         }
     }
@@ -564,9 +566,9 @@ fn detect_cloud(
             let scene = req
                 .mesh_scene
                 .then_some((input.cloud.points.as_slice(), r.labels.as_slice()));
-            crate::glb::write_agents_glb(&target, &name, &r.detections, scene)
+            crate::glb::write_agents_glb(&target, &name, &r.detections, &legend, scene)
         } else {
-            crate::agent_mesh::agent_mesh_ply(&r.detections, &target)
+            crate::agent_mesh::agent_mesh_ply(&r.detections, &legend, &target)
         };
         if let Err(e) = written {
             done.errors.push(batch::printable(&format!(
@@ -579,12 +581,18 @@ fn detect_cloud(
 }
 
 /// Writes the input cloud (world frame) with its segments ([`crate::agent_mesh::segments_ply`]).
-fn write_segments(input: &Input, target: &Path, r: &FileReport) -> Result<(), cloud::CloudError> {
+fn write_segments(
+    input: &Input,
+    target: &Path,
+    r: &FileReport,
+    legend: &Legend,
+) -> Result<(), cloud::CloudError> {
     crate::agent_mesh::segments_ply(
         &input.cloud.points,
         &r.detections,
         &r.labels,
         &r.ids,
+        legend,
         target,
     )
 }
@@ -677,7 +685,10 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
         labels: r.labels.clone(),
         stats,
     };
-    if let Err(e) = crate::render::inspect_png(&loaded.cloud, &prepared, &hyps, &drawn, &req.png) {
+    let legend = Legend::of(models.iter().map(|m| &m.hierarchy));
+    if let Err(e) =
+        crate::render::inspect_png(&loaded.cloud, &prepared, &hyps, &drawn, &legend, &req.png)
+    {
         let _ = writeln!(err, "error: {}: cannot write: {e}", req.png.display());
         return 2;
     }

@@ -213,3 +213,36 @@ fn the_examples_of_docs_models_md_load() {
     }
     assert_eq!(kinds, ["agent", "hierarchy"]);
 }
+
+/// The colour of the first vertex of the posed-agent mesh of `o`'s detections, drawn with
+/// the legend of `h`.
+fn mesh_colour(o: &Outcome, h: &Hierarchy) -> [u8; 3] {
+    let legend = afford::render::Legend::of([h]);
+    let bytes = afford::agent_mesh::agent_mesh_bytes(&o.detections, &legend);
+    let body = bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .unwrap()
+        + 11;
+    bytes[body + 12..body + 15].try_into().unwrap()
+}
+
+#[test]
+fn a_new_hierarchy_draws_in_its_own_colours() {
+    let (o, _) = run(&bar_stool(true), 1.75);
+    assert!(perches(&o));
+    // Without a legend: the first colour of the node palette, not the grey of the unknown.
+    let (_, h) = models(1.75);
+    assert_eq!(mesh_colour(&o, &h), afford::hierarchy::NODE_PALETTE[0]);
+    assert_ne!(mesh_colour(&o, &h), afford::render::OTHER_AFFORDANCE);
+    // With one: the file's colour.
+    let text = PERCHING.replace(
+        "suppression_radius = 0.25",
+        "legend = [{ id = \"perching\", colour = [10, 20, 30] }]\nsuppression_radius = 0.25",
+    );
+    let agent =
+        Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let h = Hierarchy::load(&write(&dir, &text), &agent).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(mesh_colour(&o, &h), [10, 20, 30]);
+}

@@ -1,6 +1,7 @@
 //! The glTF output, read back by the `gltf` crate.
 
-use afford::render::{AFFORDANCE_LEGEND, OTHER_AFFORDANCE};
+use afford::model_set::{load_set, sources, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
+use afford::render::Legend;
 
 use super::*;
 
@@ -15,12 +16,12 @@ fn to_srgb(l: f32) -> u8 {
     (s * 255.0).round() as u8
 }
 
+/// The colour the built-in hierarchies' legends give a detection with `affordances`.
 fn legend(affordances: &[String]) -> [u8; 3] {
-    AFFORDANCE_LEGEND
-        .iter()
-        .rev()
-        .find(|(id, _)| affordances.iter().any(|a| a == id))
-        .map_or(OTHER_AFFORDANCE, |(_, c)| *c)
+    let agents = sources(&[], BUILTIN_AGENTS, &["human"]).unwrap();
+    let hierarchies = sources(&[], BUILTIN_HIERARCHIES, &["sitting", "lying"]).unwrap();
+    let models = load_set(&agents, &hierarchies, &[1.75]).unwrap();
+    Legend::of(models.iter().map(|m| &m.hierarchy)).colour(affordances)
 }
 
 #[test]
