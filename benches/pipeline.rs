@@ -6,10 +6,10 @@ use std::path::Path;
 
 use afford::cloud;
 use afford::detect::{detect, detect_all, prepare, DetectConfig};
-use afford::heightmap::HeightMap;
-use afford::hypotheses::hypotheses;
+use afford::method::heightmap::HeightMap;
+use afford::method::hypotheses::hypotheses;
+use afford::method::scene::Scene;
 use afford::run::load_models;
-use afford::scene::Scene;
 use afford::synth::{scene_cloud, sofa, SofaParams};
 use criterion::{criterion_group, criterion_main, Criterion};
 

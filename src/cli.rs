@@ -299,7 +299,7 @@ fn parse_shard(s: &str) -> Result<Shard, String> {
 
 fn parse_height(s: &str) -> Result<f64, String> {
     let h: f64 = s.parse().map_err(|e| format!("{e}"))?;
-    crate::agent::check_height(h).map_err(|e| format!("{e} (metres, not centimetres?)"))
+    crate::model::agent::check_height(h).map_err(|e| format!("{e} (metres, not centimetres?)"))
 }
 
 fn parse_density(s: &str) -> Result<f64, String> {

@@ -11,7 +11,7 @@ use nalgebra::{Matrix4, Point3};
 use crate::cloud::{keep_finite, FrameOptions, FrameReport};
 use crate::detect::{detect_all, DetectConfig};
 use crate::input::{load_input, to_input, Input, InputError, InputOptions};
-use crate::model_set::Model;
+use crate::model::set::Model;
 use crate::report::FileReport;
 
 /// One input's detection, with the links back to the caller's rows.

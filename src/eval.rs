@@ -30,8 +30,8 @@ use serde::Serialize;
 
 use crate::cloud;
 use crate::detect::detect_all;
+use crate::model::set::{ids as ids_of, load_set, Model};
 use crate::model::ModelError;
-use crate::model_set::{ids as ids_of, load_set, Model};
 use crate::report::{self, FileReport};
 use crate::settings::{ModelChoice, Settings};
 

@@ -8,6 +8,13 @@
 //! key is shown (`joint.knee_l.parent`) and where it is in the document (array elements by
 //! position, so that of two joints with the same name the right one is found); the line is
 //! then looked up in the document's spans.
+//!
+//! The models: the body ([`agent`]), the affordance hierarchies ([`hierarchy`]) and the
+//! bodies at their heights with every hierarchy ([`set`]).
+
+pub mod agent;
+pub mod hierarchy;
+pub mod set;
 
 use std::collections::HashMap;
 use std::ops::Range;

@@ -3,13 +3,20 @@
 //! temporary file beside it and renamed into place, so nothing half-written is left.
 //!
 //! Numbers are printed with fixed decimals so that the same input gives the same bytes.
+//! Beside the tables: pictures ([`render`]), the agents as meshes ([`agent_mesh`], [`glb`])
+//! and the atomic file writes every writer uses ([`atomic`]).
+
+pub mod agent_mesh;
+pub mod atomic;
+pub mod glb;
+pub mod render;
 
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
 use crate::detect::{Detection, Outcome, Stats};
-use crate::model_set::Model;
+use crate::model::set::Model;
 
 /// The result of one input file over every model of the run, as it goes into the outputs.
 #[derive(Debug, Clone)]
@@ -71,7 +78,7 @@ impl FileReport {
         FileReport {
             file,
             dropped_non_finite,
-            ids: crate::model_set::ids(models),
+            ids: crate::model::set::ids(models),
             runs,
             detections,
             labels,

@@ -4,15 +4,15 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use crate::agent::Agent;
 use crate::batch::{self, LogLine, Shard, Status};
 use crate::cloud;
 use crate::detect::{detect_all_prepared, prepare, DetectConfig};
-use crate::extent::{guard, ExtentConfig, ExtentError};
-use crate::hierarchy::Hierarchy;
 use crate::input::{load_input, Input, InputOptions};
+use crate::method::extent::{guard, ExtentConfig, ExtentError};
+use crate::model::agent::Agent;
+use crate::model::hierarchy::Hierarchy;
+use crate::model::set::{Model, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
 use crate::model::ModelError;
-use crate::model_set::{Model, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
 use crate::report::{self, FileReport};
 use crate::settings::Settings;
 
@@ -93,12 +93,12 @@ pub enum FileError {
     /// It could not be read.
     #[error(transparent)]
     Cloud(#[from] cloud::CloudError),
-    /// Its extent or coordinates are refused before the grids ([`crate::extent`]).
+    /// Its extent or coordinates are refused before the grids ([`crate::method::extent`]).
     #[error(transparent)]
     Extent(#[from] ExtentError),
 }
 
-/// Detection on one cloud: the grids are built from the points [`crate::extent::guard`]
+/// Detection on one cloud: the grids are built from the points [`crate::method::extent::guard`]
 /// keeps; the segments and the report cover every point of `cloud`.
 fn report_of(
     path: &Path,
@@ -317,7 +317,7 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
     let mut write = |target: &Option<PathBuf>, text: Result<String, csv::Error>| {
         if let Some(p) = target {
             let done = text.map_err(|e| e.to_string()).and_then(|t| {
-                crate::atomic::write_bytes(p, t.as_bytes()).map_err(|e| e.to_string())
+                crate::report::atomic::write_bytes(p, t.as_bytes()).map_err(|e| e.to_string())
             });
             if let Err(e) = done {
                 let _ = writeln!(err, "error: {}: cannot write: {e}", p.display());
@@ -506,7 +506,7 @@ fn detect_one(
     }
     if let (Some(target), true) = (saved, done.errors.is_empty()) {
         let json = report::to_json(&done.reports);
-        if let Err(e) = crate::atomic::write_bytes(target, json.as_bytes()) {
+        if let Err(e) = crate::report::atomic::write_bytes(target, json.as_bytes()) {
             done.errors.push(batch::printable(&format!(
                 "{}: cannot write: {e}",
                 target.display()
@@ -564,9 +564,9 @@ fn detect_cloud(
             let scene = req
                 .mesh_scene
                 .then_some((input.cloud.points.as_slice(), r.labels.as_slice()));
-            crate::glb::write_agents_glb(&target, &name, &r.detections, scene)
+            crate::report::glb::write_agents_glb(&target, &name, &r.detections, scene)
         } else {
-            crate::agent_mesh::agent_mesh_ply(&r.detections, &target)
+            crate::report::agent_mesh::agent_mesh_ply(&r.detections, &target)
         };
         if let Err(e) = written {
             done.errors.push(batch::printable(&format!(
@@ -578,9 +578,9 @@ fn detect_cloud(
     done.reports.push(r);
 }
 
-/// Writes the input cloud (world frame) with its segments ([`crate::agent_mesh::segments_ply`]).
+/// Writes the input cloud (world frame) with its segments ([`crate::report::agent_mesh::segments_ply`]).
 fn write_segments(input: &Input, target: &Path, r: &FileReport) -> Result<(), cloud::CloudError> {
-    crate::agent_mesh::segments_ply(
+    crate::report::agent_mesh::segments_ply(
         &input.cloud.points,
         &r.detections,
         &r.labels,
@@ -654,7 +654,7 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
     let hyps = models
         .first()
         .map(|m| {
-            crate::hypotheses::hypotheses(
+            crate::method::hypotheses::hypotheses(
                 &prepared.map,
                 &m.hierarchy.hypothesis,
                 m.hierarchy.orientation,
@@ -677,7 +677,9 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
         labels: r.labels.clone(),
         stats,
     };
-    if let Err(e) = crate::render::inspect_png(&loaded.cloud, &prepared, &hyps, &drawn, &req.png) {
+    if let Err(e) =
+        crate::report::render::inspect_png(&loaded.cloud, &prepared, &hyps, &drawn, &req.png)
+    {
         let _ = writeln!(err, "error: {}: cannot write: {e}", req.png.display());
         return 2;
     }
@@ -835,7 +837,7 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
     let mut code = print(out, err, &ev.markdown()).err().unwrap_or(0);
     for (target, text) in [(&req.json, ev.to_json()), (&req.csv, ev.to_csv())] {
         if let Some(p) = target {
-            if let Err(e) = crate::atomic::write_bytes(p, text.as_bytes()) {
+            if let Err(e) = crate::report::atomic::write_bytes(p, text.as_bytes()) {
                 let _ = writeln!(err, "error: {}: cannot write: {e}", p.display());
                 code = 2;
             }
@@ -870,7 +872,7 @@ pub struct ConvertRequest {
 /// Runs `afford convert`: reads any input the detector reads (with the same frame options)
 /// and writes it as PLY (binary or ascii) or binary PCD, in metres, z up, floor at z = 0.
 pub fn run_convert(req: &ConvertRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
-    if crate::atomic::same_file(&req.input, &req.output) {
+    if crate::report::atomic::same_file(&req.input, &req.output) {
         let _ = writeln!(
             err,
             "error: {}: is the input; refusing to replace it",

@@ -7,11 +7,11 @@
 
 use std::ops::RangeInclusive;
 
-use crate::agent::check_height;
 use crate::detect::{DetectConfig, DEFAULT_VOXEL};
 use crate::input::InputOptions;
+use crate::model::agent::check_height;
+use crate::model::set::{load_set, sources, Model, Source, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
 use crate::model::ModelError;
-use crate::model_set::{load_set, sources, Model, Source, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
 
 /// Voxel edges a scene may have, metres: finer than 2 mm only records sensor noise (and
 /// the grids of a room outgrow memory); coarser than 10 cm is wider than a limb, so the
@@ -40,7 +40,7 @@ pub fn check_range(value: f64, range: &RangeInclusive<f64>, what: &str) -> Resul
 }
 
 /// Which models a command runs: bodies (agents at heights) and hierarchies, each named by
-/// file, folder or built-in name (see [`crate::model_set::sources`]).
+/// file, folder or built-in name (see [`crate::model::set::sources`]).
 #[derive(Debug, Clone, Default)]
 pub struct ModelChoice {
     /// Agents; empty for the built-in `human`.
@@ -79,7 +79,7 @@ impl ModelChoice {
 /// A value of the configuration outside its range.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 pub enum SettingsError {
-    /// A body height outside [`crate::agent::HEIGHT_RANGE`].
+    /// A body height outside [`crate::model::agent::HEIGHT_RANGE`].
     #[error("--height: {0}")]
     Height(String),
     /// A voxel edge outside [`VOXEL_RANGE`].
@@ -121,7 +121,7 @@ impl Settings {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::agent::HEIGHT_RANGE;
+    use crate::model::agent::HEIGHT_RANGE;
 
     #[test]
     fn the_parser_range_is_the_loader_range() {

@@ -6,9 +6,9 @@
 
 use std::path::{Path, PathBuf};
 
-use afford::agent::Agent;
 use afford::detect::{detect, DetectConfig, Outcome};
-use afford::hierarchy::Hierarchy;
+use afford::model::agent::Agent;
+use afford::model::hierarchy::Hierarchy;
 use afford::synth::*;
 use nalgebra::Point3;
 

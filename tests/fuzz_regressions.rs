@@ -4,8 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
-use afford::agent::Agent;
-use afford::hierarchy::Hierarchy;
+use afford::model::agent::Agent;
+use afford::model::hierarchy::Hierarchy;
 
 /// Writes `bytes` to `name` in a fresh temporary directory.
 fn file(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> PathBuf {

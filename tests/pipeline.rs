@@ -4,10 +4,10 @@
 
 use std::path::Path;
 
-use afford::agent::Agent;
 use afford::cloud::PointCloud;
 use afford::detect::{detect, DetectConfig, Outcome};
-use afford::hierarchy::Hierarchy;
+use afford::model::agent::Agent;
+use afford::model::hierarchy::Hierarchy;
 use afford::synth::*;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 

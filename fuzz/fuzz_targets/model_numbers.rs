@@ -9,10 +9,10 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
-use afford::agent::Agent;
 use afford::cloud::PointCloud;
 use afford::detect::{detect, DetectConfig};
-use afford::hierarchy::Hierarchy;
+use afford::model::agent::Agent;
+use afford::model::hierarchy::Hierarchy;
 use libfuzzer_sys::fuzz_target;
 use nalgebra::Point3;
 

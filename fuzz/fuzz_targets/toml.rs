@@ -4,8 +4,8 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
-use afford::agent::Agent;
-use afford::hierarchy::Hierarchy;
+use afford::model::agent::Agent;
+use afford::model::hierarchy::Hierarchy;
 use libfuzzer_sys::fuzz_target;
 
 fn builtin() -> &'static Agent {

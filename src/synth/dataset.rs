@@ -1523,7 +1523,7 @@ pub fn write_labels(path: &Path, rows: &[LabelRow]) -> Result<(), SynthError> {
         path: path.to_path_buf(),
         what: e.to_string(),
     })?;
-    crate::atomic::write_bytes(path, &bytes).map_err(io_err(path))
+    crate::report::atomic::write_bytes(path, &bytes).map_err(io_err(path))
 }
 
 /// Generates a labelled dataset in `out_dir` (created if needed): `spec.full + spec.view +

@@ -1,6 +1,6 @@
 //! The glTF output, read back by the `gltf` crate.
 
-use afford::render::{AFFORDANCE_LEGEND, OTHER_AFFORDANCE};
+use afford::report::render::{AFFORDANCE_LEGEND, OTHER_AFFORDANCE};
 
 use super::*;
 

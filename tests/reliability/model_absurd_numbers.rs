@@ -8,8 +8,8 @@
 
 use std::path::Path;
 
-use afford::agent::Agent;
-use afford::hierarchy::Hierarchy;
+use afford::model::agent::Agent;
+use afford::model::hierarchy::Hierarchy;
 
 use crate::common::*;
 

@@ -1,7 +1,7 @@
 //! Cause: the atomic writer always renamed a temporary file over the target, so as root
 //! `--json /dev/null` replaced the device with a regular file, `--json /dev/full` "worked"
 //! (exit 0), and a symbolic link given as output became a regular file while its target
-//! kept the old content. `afford::atomic` now writes special files directly (reporting
+//! kept the old content. `afford::report::atomic` now writes special files directly (reporting
 //! every error, a full device included) and writes through links to their target.
 
 use crate::common::*;

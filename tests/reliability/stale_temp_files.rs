@@ -1,10 +1,10 @@
 //! Cause: `kill -9` during a write left `<name>.tmp-<pid>` files (8.5 MB of segments) that
 //! no later run removed, and the PLY/PCD ones were not hidden like the JSON ones. All
-//! writers now share `afford::atomic`: hidden `.<name>.afford-tmp-<pid>` names, and a
+//! writers now share `afford::report::atomic`: hidden `.<name>.afford-tmp-<pid>` names, and a
 //! write to a target first removes the temporary files of that target whose process is
 //! gone.
 
-use afford::atomic::{temp_path, write_bytes};
+use afford::report::atomic::{temp_path, write_bytes};
 
 #[test]
 fn a_dead_process_temp_file_is_removed_by_the_next_write() {

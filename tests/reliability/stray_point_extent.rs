@@ -1,6 +1,6 @@
 //! Cause: the height map and the distance field are dense grids over the cloud's bounding
 //! box, so one stray point 100 m away asked for 14.8 GB and aborted the whole batch. The
-//! guard stage (`afford::extent`) bins points into coarse cubes with a hash map, keeps the
+//! guard stage (`afford::method::extent`) bins points into coarse cubes with a hash map, keeps the
 //! connected regions holding the bulk of the points, and refuses an extent whose grids
 //! would exceed the budget, with one line naming the file.
 
@@ -9,7 +9,7 @@ use std::path::Path;
 
 use afford::cloud::PointCloud;
 use afford::detect::DetectConfig;
-use afford::extent::{guard, ExtentConfig, ExtentError};
+use afford::method::extent::{guard, ExtentConfig, ExtentError};
 use nalgebra::Point3;
 
 use crate::common::*;

@@ -11,8 +11,8 @@ use nalgebra::{Point2, Point3, Vector3};
 
 use crate::cloud::PointCloud;
 use crate::detect::{Detection, Outcome, Prepared};
-use crate::heightmap::HeightMap;
-use crate::hypotheses::Hypothesis;
+use crate::method::heightmap::HeightMap;
+use crate::method::hypotheses::Hypothesis;
 
 /// An RGB image, 8 bits per channel, row-major from the top-left corner.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -280,7 +280,7 @@ impl Image {
     /// Saves the image as PNG at `path`, atomically: a temporary file in the same
     /// directory is written, synced and renamed into place.
     pub fn save_png(&self, path: &Path) -> std::io::Result<()> {
-        crate::atomic::write_bytes(path, &self.png_bytes()?)
+        crate::report::atomic::write_bytes(path, &self.png_bytes()?)
     }
 }
 
@@ -704,7 +704,7 @@ pub fn inspect_png(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::agent::Cylinder;
+    use crate::model::agent::Cylinder;
 
     fn map_3x2() -> HeightMap {
         // Row 0 (bottom): 0.0, 0.5, invalid; row 1 (top): 1.0, 0.2, 0.0.
@@ -947,7 +947,7 @@ mod demo {
 
     use super::*;
     use crate::detect::{detect_prepared, prepare, DetectConfig};
-    use crate::hypotheses::hypotheses;
+    use crate::method::hypotheses::hypotheses;
     use crate::run::load_models;
     use crate::synth::{self, ChairParams};
 

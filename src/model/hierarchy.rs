@@ -11,8 +11,8 @@ use std::path::Path;
 use nalgebra::{Unit, Vector3};
 use serde::Deserialize;
 
-use crate::agent::{Agent, Posture};
-use crate::fuzzy::{Availability, Low, Trapezoid};
+use crate::method::fuzzy::{Availability, Low, Trapezoid};
+use crate::model::agent::{Agent, Posture};
 use crate::model::{parse_toml, read_text, tree_order, Key, ModelError, Source, TreeWords};
 
 /// How the agent's heading relates to the height-gradient descent (section 4.1).
@@ -902,7 +902,7 @@ mod tests {
     fn every_built_in_sweep_turns_about_its_joints_own_axis() {
         // One sign convention: a hip flexed 90 deg is +90 in sitting and in lying alike.
         let a = agent();
-        for (name, text) in crate::model_set::BUILTIN_HIERARCHIES {
+        for (name, text) in crate::model::set::BUILTIN_HIERARCHIES {
             let h = Hierarchy::from_toml(text, Path::new(name), &a).unwrap();
             for n in &h.nodes {
                 for s in &n.sweeps {
@@ -910,7 +910,7 @@ mod tests {
                 }
             }
         }
-        let lying = crate::model_set::BUILTIN_HIERARCHIES[1].1;
+        let lying = crate::model::set::BUILTIN_HIERARCHIES[1].1;
         let h = Hierarchy::from_toml(lying, Path::new("lying.toml"), &a).unwrap();
         let hip = a.joint_index("hip_l").unwrap();
         let s = h.nodes[0].sweeps.iter().find(|s| s.joint == hip).unwrap();

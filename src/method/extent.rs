@@ -170,12 +170,12 @@ pub fn guard<'a>(
 }
 
 /// Bytes the height map and the distance field take over an extent (metres along x, y, z)
-/// while a body moves within a cube of edge `reach` metres ([`crate::scene::field_bytes`]),
+/// while a body moves within a cube of edge `reach` metres ([`crate::method::scene::field_bytes`]),
 /// as an upper bound (computed in f64, so any extent gives a number).
 pub fn grid_bytes(extent: [f64; 3], cfg: &DetectConfig, reach: f64) -> f64 {
     let hc = cfg.heightmap.cell;
     let map = (extent[0] / hc + 1.0).floor() * (extent[1] / hc + 1.0).floor();
-    map * HEIGHTMAP_CELL_BYTES + crate::scene::field_bytes(extent, &cfg.scene, reach)
+    map * HEIGHTMAP_CELL_BYTES + crate::method::scene::field_bytes(extent, &cfg.scene, reach)
 }
 
 /// Per point, whether it lies in a connected region of coarse cubes (edge `cell`, touching

@@ -6,10 +6,10 @@ use std::path::Path;
 
 use nalgebra::{Point3, Vector3};
 
-use crate::agent::Cylinder;
 use crate::cloud::{CloudError, Scalar};
 use crate::detect::Detection;
-use crate::render::{affordance_colour, finest_affordance};
+use crate::model::agent::Cylinder;
+use crate::report::render::{affordance_colour, finest_affordance};
 
 /// Segments around the circumference of every body part in [`agent_mesh_ply`].
 pub const SEGMENTS: usize = 16;
@@ -111,7 +111,7 @@ pub fn agent_mesh_bytes(detections: &[Detection]) -> Vec<u8> {
 /// affordance ([`affordance_colour`], the palette of the pictures). The file is written
 /// to a temporary file in the same directory and renamed into place.
 pub fn agent_mesh_ply(detections: &[Detection], path: &Path) -> std::io::Result<()> {
-    crate::atomic::write_bytes(path, &agent_mesh_bytes(detections))
+    crate::report::atomic::write_bytes(path, &agent_mesh_bytes(detections))
 }
 
 /// Colour of the points in no detection's segment in [`segments_ply`].
@@ -266,10 +266,16 @@ mod tests {
         let body = &bytes[text_end..];
         let z = f32::from_le_bytes(body[8..12].try_into().unwrap());
         assert!(z.abs() < 1e-6);
-        assert_eq!(&body[12..15], &crate::render::AFFORDANCE_LEGEND[1].1);
+        assert_eq!(
+            &body[12..15],
+            &crate::report::render::AFFORDANCE_LEGEND[1].1
+        );
         // Last vertex belongs to the second detection: "sitting" colour.
         let last = &body[15 * (nv - 1)..15 * nv];
-        assert_eq!(&last[12..15], &crate::render::AFFORDANCE_LEGEND[0].1);
+        assert_eq!(
+            &last[12..15],
+            &crate::report::render::AFFORDANCE_LEGEND[0].1
+        );
         // Faces: count byte 3 and indices inside the vertex range.
         let faces = &body[15 * nv..];
         for f in faces.chunks(13) {
@@ -347,7 +353,7 @@ mod tests {
             })
         };
         let legend = |id: &str| {
-            crate::render::AFFORDANCE_LEGEND
+            crate::report::render::AFFORDANCE_LEGEND
                 .iter()
                 .find(|(l, _)| *l == id)
                 .unwrap()

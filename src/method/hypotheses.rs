@@ -3,9 +3,9 @@
 
 use nalgebra::{Matrix3, Point3, Vector3};
 
-use crate::fuzzy::{rule, Trapezoid};
-use crate::heightmap::HeightMap;
-use crate::hierarchy::{HypothesisRule, Orientation};
+use crate::method::fuzzy::{rule, Trapezoid};
+use crate::method::heightmap::HeightMap;
+use crate::model::hierarchy::{HypothesisRule, Orientation};
 
 /// A promising position for the agent.
 #[derive(Debug, Clone, PartialEq)]
@@ -155,7 +155,7 @@ pub fn descent(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fuzzy::{Availability, Low, Trapezoid};
+    use crate::method::fuzzy::{Availability, Low, Trapezoid};
 
     fn rule_() -> HypothesisRule {
         HypothesisRule {

@@ -17,8 +17,8 @@ use nalgebra::{Point3, Vector3};
 use parry3d::math::{IVector, Pose, Rotation, Vector};
 use parry3d::shape::{Cylinder as ParryCylinder, Voxels};
 
-use crate::agent::Cylinder;
 use crate::cloud::PointCloud;
+use crate::model::agent::Cylinder;
 
 /// How the scene is built.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -8,21 +8,21 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::agent::Agent;
-use crate::hierarchy::Hierarchy;
+use crate::model::agent::Agent;
+use crate::model::hierarchy::Hierarchy;
 use crate::model::ModelError;
 
 /// The agent files compiled into the binary, by name (`agents/NAME.toml`).
 pub const BUILTIN_AGENTS: &[(&str, &str)] = &[
-    ("human", include_str!("../agents/human.toml")),
-    ("child", include_str!("../agents/child.toml")),
+    ("human", include_str!("../../agents/human.toml")),
+    ("child", include_str!("../../agents/child.toml")),
 ];
 
 /// The hierarchy files compiled into the binary, by name (`affordances/NAME.toml`); all
 /// of them run when none is named.
 pub const BUILTIN_HIERARCHIES: &[(&str, &str)] = &[
-    ("sitting", include_str!("../affordances/sitting.toml")),
-    ("lying", include_str!("../affordances/lying.toml")),
+    ("sitting", include_str!("../../affordances/sitting.toml")),
+    ("lying", include_str!("../../affordances/lying.toml")),
 ];
 
 /// Where a model's TOML text comes from.

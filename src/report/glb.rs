@@ -2,8 +2,8 @@
 //! glTF 2.0 (`.glb`), the format browser viewers, Blender, rerun and Foxglove open.
 //!
 //! Every detection is one named node (`detection 3: sitting, backrest`) holding one
-//! triangle mesh of its body parts ([`crate::agent_mesh::cylinder_mesh`]) with one
-//! material in its affordance colour ([`crate::render::affordance_colour`], the palette
+//! triangle mesh of its body parts ([`crate::report::agent_mesh::cylinder_mesh`]) with one
+//! material in its affordance colour ([`crate::report::render::affordance_colour`], the palette
 //! of the pictures and of the PLY mesh); the node's `extras` carry the detection's
 //! numbers. The scene's points, when asked for, are one more node of `POINTS` whose
 //! `COLOR_0` is the colour of the detection whose segment holds each point (grey for none,
@@ -15,9 +15,9 @@ use std::path::Path;
 use nalgebra::Point3;
 use serde_json::{json, Value};
 
-use crate::agent_mesh::{cylinder_mesh, SEGMENTS, UNLABELLED};
 use crate::detect::Detection;
-use crate::render::{affordance_colour, finest_affordance};
+use crate::report::agent_mesh::{cylinder_mesh, SEGMENTS, UNLABELLED};
+use crate::report::render::{affordance_colour, finest_affordance};
 
 /// Name of the root node, which turns the world frame (z up) into glTF's (y up).
 pub const ROOT_NAME: &str = "afford (world frame, z up)";
@@ -262,7 +262,7 @@ pub fn write_agents_glb(
     detections: &[Detection],
     points: Option<ScenePoints>,
 ) -> std::io::Result<()> {
-    crate::atomic::write_bytes(path, &agents_glb(file, detections, points))
+    crate::report::atomic::write_bytes(path, &agents_glb(file, detections, points))
 }
 
 #[cfg(test)]

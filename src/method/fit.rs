@@ -5,10 +5,10 @@
 
 use nalgebra::Point3;
 
-use crate::agent::{Agent, Cylinder, Placement, Posture};
-use crate::hierarchy::Hierarchy;
-use crate::hypotheses::Hypothesis;
-use crate::scene::Scene;
+use crate::method::hypotheses::Hypothesis;
+use crate::method::scene::Scene;
+use crate::model::agent::{Agent, Cylinder, Placement, Posture};
+use crate::model::hierarchy::Hierarchy;
 
 /// The agent resting at a hypothesis in its initial pose.
 #[derive(Debug, Clone, PartialEq)]
@@ -192,9 +192,9 @@ pub fn stability(
 mod tests {
     use super::*;
     use crate::cloud::PointCloud;
-    use crate::hierarchy::Hierarchy;
+    use crate::method::scene::SceneConfig;
+    use crate::model::hierarchy::Hierarchy;
     use crate::run::{BUILTIN_AGENT, BUILTIN_SITTING};
-    use crate::scene::SceneConfig;
     use std::path::Path;
 
     fn models() -> (Agent, Hierarchy) {

@@ -10,10 +10,10 @@
 //! is one "edge" of Eq. 3-4: its local score is exp(-(theta_d - theta_c)^2 / 2 sigma^2)
 //! (the squared differences averaged over its joints) on contact, epsilon otherwise.
 
-use crate::agent::{Agent, Cylinder, Placement, Posture};
-use crate::fit::{ContactConfig, Fit};
-use crate::hierarchy::{Hierarchy, Node, Spread};
-use crate::scene::Scene;
+use crate::method::fit::{ContactConfig, Fit};
+use crate::method::scene::Scene;
+use crate::model::agent::{Agent, Cylinder, Placement, Posture};
+use crate::model::hierarchy::{Hierarchy, Node, Spread};
 
 /// The outcome of one node.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,7 +48,11 @@ impl Unfolded {
     }
 
     /// Whether `self` ranks above `other` under `select` (ties are not stronger).
-    pub fn stronger_than(&self, other: &Unfolded, select: crate::hierarchy::Selection) -> bool {
+    pub fn stronger_than(
+        &self,
+        other: &Unfolded,
+        select: crate::model::hierarchy::Selection,
+    ) -> bool {
         self.rank(other, select) == std::cmp::Ordering::Greater
     }
 
@@ -56,9 +60,9 @@ impl Unfolded {
     pub fn rank(
         &self,
         other: &Unfolded,
-        select: crate::hierarchy::Selection,
+        select: crate::model::hierarchy::Selection,
     ) -> std::cmp::Ordering {
-        use crate::hierarchy::Selection;
+        use crate::model::hierarchy::Selection;
         match select {
             Selection::Score => self.score.total_cmp(&other.score),
             Selection::MostSpecific => self
@@ -418,7 +422,7 @@ impl NodeContext<'_> {
                     local = t_norm(local, r);
                 }
             }
-            if node.contact == crate::hierarchy::ContactRule::All {
+            if node.contact == crate::model::hierarchy::ContactRule::All {
                 found &= all_found;
             }
             let better = match &outcome {
@@ -485,10 +489,10 @@ pub fn branches(agent: &Agent, node: &Node) -> Vec<Vec<usize>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::agent::Agent;
     use crate::cloud::PointCloud;
     use crate::detect::DetectConfig;
-    use crate::hierarchy::Clamp;
+    use crate::model::agent::Agent;
+    use crate::model::hierarchy::Clamp;
     use nalgebra::{Point3, Vector3};
     use std::path::Path;
 
