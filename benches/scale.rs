@@ -4,7 +4,7 @@
 //! `chair_view` (one depth view of an armchair, 100k-300k points), `room_view` (one depth
 //! view of a furnished room corner, 200k-300k points), `room_scan` (the whole room
 //! sampled from its surfaces, about 1M points) and `big_floor` (one chair on a
-//! 200 m x 200 m floor); see `afford::synth::scenes`.
+//! 200 m x 200 m floor); see `afford_synth::scenes`.
 //!
 //! Every stage alone (PLY read, height map, hypotheses, scene, the distance field over
 //! the whole occupied box, fitting, unfolding, segmentation) and the default run end to
@@ -22,8 +22,8 @@ use afford::method::scene::Scene;
 use afford::method::select::segment;
 use afford::method::unfold::unfold;
 use afford::model::set::Model;
-use afford::run::ModelChoice;
-use afford::synth::scenes::speed_scenes;
+use afford::model::set::ModelChoice;
+use afford_synth::scenes::speed_scenes;
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::Point3;
 

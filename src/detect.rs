@@ -47,7 +47,7 @@ impl Default for DetectConfig {
 impl DetectConfig {
     /// The defaults for a scene of `voxel_size` metres: the numbers defined as fractions
     /// of the voxel ([`CONTACT_VOXELS`], [`GROW_VOXELS`]) follow it. The caller checks the
-    /// size (see [`crate::settings::VOXEL_RANGE`]).
+    /// size (the command line checks it against its voxel range).
     pub fn for_voxel(voxel_size: f64) -> Self {
         DetectConfig {
             heightmap: HeightMapConfig::default(),

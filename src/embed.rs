@@ -121,7 +121,7 @@ fn detect_in(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::run::ModelChoice;
+    use crate::model::set::ModelChoice;
 
     /// A seat-height box top (0.45 m) on a floor, 1 cm apart: something to sit on.
     fn stool() -> Vec<Point3<f64>> {

@@ -10,17 +10,12 @@
 //! [`method::scene::Scene`] → [`method::fit::fit`] → [`method::unfold::unfold`] →
 //! [`method::select`] → [`report`].
 
-pub mod batch;
-pub mod cli;
 pub mod cloud;
 pub mod detect;
 pub mod embed;
 pub mod eval;
 pub mod input;
+pub mod mesh;
 pub mod method;
 pub mod model;
 pub mod report;
-pub mod run;
-pub mod settings;
-mod source_args;
-pub mod synth;

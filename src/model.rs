@@ -17,7 +17,7 @@ pub mod hierarchy;
 pub mod set;
 
 use std::collections::HashMap;
-use std::ops::Range;
+use std::ops::{Range, RangeInclusive};
 use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
@@ -407,6 +407,18 @@ impl Source<'_> {
 
 /// 1-based number of the `nth` (from 0) line of `text` that contains `needle`, for tests
 /// that check the line an error names.
+/// Checks a length `value` (metres) against `range`; the error says `what` is outside it.
+pub fn check_range(value: f64, range: &RangeInclusive<f64>, what: &str) -> Result<f64, String> {
+    if value.is_finite() && range.contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!(
+            "{what} {value} m is outside {:?}-{:?} m",
+            range.start(),
+            range.end()
+        ))
+    }
+}
 #[cfg(test)]
 pub(crate) fn line_of(text: &str, needle: &str, nth: usize) -> usize {
     text.lines()

@@ -4,12 +4,14 @@
 //!
 //! Numbers are printed with fixed decimals so that the same input gives the same bytes.
 //! Beside the tables: pictures ([`render`]), the agents as meshes ([`agent_mesh`], [`glb`])
-//! and the atomic file writes every writer uses ([`atomic`]).
+//! the atomic file writes every writer uses ([`atomic`]), and reading saved outputs back
+//! ([`saved`]).
 
 pub mod agent_mesh;
 pub mod atomic;
 pub mod glb;
 pub mod render;
+pub mod saved;
 
 use std::collections::BTreeMap;
 
@@ -120,7 +122,7 @@ fn round(x: f64, d: i32) -> f64 {
 
 /// The JSON document of `afford detect --json` (and of each `--out-dir` file): version
 /// [`JSON_VERSION`], one entry per input cloud. [`to_json`] writes it and
-/// [`crate::batch::read_saved`] reads it, with these same types. Numbers are rounded as
+/// [`saved::read_saved`] reads it, with these same types. Numbers are rounded as
 /// written: positions, scores and joint positions to 4 decimals, heights to 3, angles to 2.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Document {

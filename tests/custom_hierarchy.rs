@@ -7,9 +7,10 @@
 use std::path::{Path, PathBuf};
 
 use afford::detect::{detect, DetectConfig, Outcome};
+use afford::mesh::{Mesh, Part};
 use afford::model::agent::Agent;
 use afford::model::hierarchy::Hierarchy;
-use afford::synth::*;
+use afford_synth::*;
 use nalgebra::Point3;
 
 /// The hierarchy under test. Angles in degrees, lengths in metres unless "fraction of H".
@@ -83,8 +84,12 @@ fn write(dir: &tempfile::TempDir, text: &str) -> PathBuf {
 
 /// The built-in agent at body height `height` and the perching hierarchy loaded from a file.
 fn models(height: f64) -> (Agent, Hierarchy) {
-    let agent = Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), height)
-        .expect("the built-in agent loads");
+    let agent = Agent::from_toml(
+        afford::model::set::BUILTIN_AGENT,
+        Path::new("human.toml"),
+        height,
+    )
+    .expect("the built-in agent loads");
     let dir = tempfile::tempdir().unwrap();
     let h = Hierarchy::load(&write(&dir, PERCHING), &agent).unwrap_or_else(|e| panic!("{e}"));
     (agent, h)
@@ -165,8 +170,12 @@ fn a_low_chair_is_no_perch() {
 
 #[test]
 fn a_broken_custom_hierarchy_is_refused_with_file_line_and_key() {
-    let agent =
-        Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap();
+    let agent = Agent::from_toml(
+        afford::model::set::BUILTIN_AGENT,
+        Path::new("human.toml"),
+        1.75,
+    )
+    .unwrap();
     let dir = tempfile::tempdir().unwrap();
     let bad = PERCHING.replace(
         "theta1 = 60.0, theta2 = 140.0",
@@ -192,8 +201,12 @@ fn a_broken_custom_hierarchy_is_refused_with_file_line_and_key() {
 fn the_examples_of_docs_models_md_load() {
     let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/models.md"))
         .unwrap();
-    let agent =
-        Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap();
+    let agent = Agent::from_toml(
+        afford::model::set::BUILTIN_AGENT,
+        Path::new("human.toml"),
+        1.75,
+    )
+    .unwrap();
     let blocks: Vec<&str> = doc
         .split("```toml\n")
         .skip(1)

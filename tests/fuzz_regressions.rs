@@ -15,7 +15,12 @@ fn file(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> PathBuf {
 }
 
 fn builtin() -> Agent {
-    Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap()
+    Agent::from_toml(
+        afford::model::set::BUILTIN_AGENT,
+        Path::new("human.toml"),
+        1.75,
+    )
+    .unwrap()
 }
 
 fn corpus(target: &str) -> Vec<(String, Vec<u8>)> {

@@ -75,8 +75,8 @@ fn edit(text: &str, n: usize, v: f64) -> String {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let mut agent_text = afford::run::BUILTIN_AGENT.to_string();
-    let mut sit_text = afford::run::BUILTIN_SITTING.to_string();
+    let mut agent_text = afford::model::set::BUILTIN_AGENT.to_string();
+    let mut sit_text = afford::model::set::BUILTIN_SITTING.to_string();
     for chunk in data.chunks_exact(9).take(4) {
         let v = f64::from_le_bytes(chunk[1..9].try_into().unwrap());
         let which = chunk[0] as usize;

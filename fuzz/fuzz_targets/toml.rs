@@ -11,7 +11,7 @@ use libfuzzer_sys::fuzz_target;
 fn builtin() -> &'static Agent {
     static AGENT: OnceLock<Agent> = OnceLock::new();
     AGENT.get_or_init(|| {
-        Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), 1.75)
+        Agent::from_toml(afford::model::set::BUILTIN_AGENT, Path::new("human.toml"), 1.75)
             .expect("builtin agent")
     })
 }

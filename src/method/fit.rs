@@ -194,7 +194,7 @@ mod tests {
     use crate::cloud::PointCloud;
     use crate::method::scene::SceneConfig;
     use crate::model::hierarchy::Hierarchy;
-    use crate::run::{BUILTIN_AGENT, BUILTIN_SITTING};
+    use crate::model::set::{BUILTIN_AGENT, BUILTIN_SITTING};
     use std::path::Path;
 
     fn models() -> (Agent, Hierarchy) {

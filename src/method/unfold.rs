@@ -519,7 +519,7 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
     /// 60 deg above level (hip -150) to 60 deg below (hip -30), held from below.
     fn models() -> (Agent, Hierarchy) {
         let agent = Agent::from_toml(STICK, Path::new("stick.toml"), 1.0).unwrap();
-        let lying = crate::run::BUILTIN_LYING;
+        let lying = crate::model::set::BUILTIN_LYING;
         let head = &lying[..lying.find("[initial_pose]").unwrap()];
         let text = format!(
             "{head}\n[initial_pose]\n\n[[node]]\nid = \"leg\"\nlinks = [\"leg\"]\n\

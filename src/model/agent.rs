@@ -27,7 +27,7 @@ pub const HEIGHT_RANGE: std::ops::RangeInclusive<f64> = 0.3..=3.0;
 /// Checks a body height (metres) against [`HEIGHT_RANGE`]; the error says why, without
 /// naming where the value came from (the caller adds the flag, file or key).
 pub fn check_height(height: f64) -> Result<f64, String> {
-    crate::settings::check_range(height, &HEIGHT_RANGE, "body height")
+    crate::model::check_range(height, &HEIGHT_RANGE, "body height")
 }
 
 /// One joint (a vertex of H) with its optional body part (the edge to its parent's frame).

@@ -840,7 +840,7 @@ fn spanned_links(
 mod tests {
     use super::*;
     use crate::model::line_of;
-    use crate::run::{BUILTIN_AGENT, BUILTIN_SITTING};
+    use crate::model::set::{BUILTIN_AGENT, BUILTIN_SITTING};
 
     fn agent() -> Agent {
         Agent::from_toml(BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap()

@@ -159,6 +159,64 @@ pub fn ids(models: &[Model]) -> Vec<String> {
     out
 }
 
+/// The body height used when none is given, metres (an average adult).
+pub const DEFAULT_HEIGHT: f64 = 1.75;
+
+/// Which models a command runs: bodies (agents at heights) and hierarchies, each named by
+/// file, folder or built-in name (see [`crate::model::set::sources`]).
+#[derive(Debug, Clone, Default)]
+pub struct ModelChoice {
+    /// Agents; empty for the built-in `human`.
+    pub agents: Vec<String>,
+    /// Hierarchies; empty for every built-in one (`sitting`, `lying`).
+    pub hierarchies: Vec<String>,
+    /// Body heights, metres; empty for [`DEFAULT_HEIGHT`].
+    pub heights: Vec<f64>,
+}
+
+impl ModelChoice {
+    /// Resolves the agent and hierarchy names to their sources, with the defaults.
+    pub fn sources(&self) -> Result<(Vec<Source>, Vec<Source>), ModelError> {
+        let agents = sources(&self.agents, BUILTIN_AGENTS, &["human"])?;
+        let names: Vec<&str> = BUILTIN_HIERARCHIES.iter().map(|(n, _)| *n).collect();
+        let hierarchies = sources(&self.hierarchies, BUILTIN_HIERARCHIES, &names)?;
+        Ok((agents, hierarchies))
+    }
+
+    /// The body heights, metres, with the default.
+    pub fn heights(&self) -> Vec<f64> {
+        if self.heights.is_empty() {
+            vec![DEFAULT_HEIGHT]
+        } else {
+            self.heights.clone()
+        }
+    }
+
+    /// Resolves the names and loads every body with every hierarchy.
+    pub fn load(&self) -> Result<Vec<Model>, ModelError> {
+        let (agents, hierarchies) = self.sources()?;
+        load_set(&agents, &hierarchies, &self.heights())
+    }
+}
+
+/// Loads the agent file scaled to `height` and the hierarchy file resolved against it.
+pub fn load_models(
+    agent: &Path,
+    affordances: &Path,
+    height: f64,
+) -> Result<(Agent, Hierarchy), ModelError> {
+    let a = Agent::load(agent, height)?;
+    let h = Hierarchy::load(affordances, &a)?;
+    Ok((a, h))
+}
+
+/// The agent model compiled into the binary (`agents/human.toml`).
+pub const BUILTIN_AGENT: &str = BUILTIN_AGENTS[0].1;
+/// The sitting hierarchy compiled into the binary (`affordances/sitting.toml`).
+pub const BUILTIN_SITTING: &str = BUILTIN_HIERARCHIES[0].1;
+/// The lying hierarchy compiled into the binary (`affordances/lying.toml`).
+pub const BUILTIN_LYING: &str = BUILTIN_HIERARCHIES[1].1;
+
 #[cfg(test)]
 mod tests {
     use super::*;
