@@ -522,9 +522,12 @@ pub fn evaluate(
             };
             let out = loaded.map(|loaded| {
                 // Part labels only line up with the points if nothing was dropped.
-                let target: Option<Vec<bool>> = parts
-                    .filter(|p| p.len() == loaded.cloud.len())
-                    .map(|p| p.iter().map(|&c| (1.0..=5.0).contains(&c)).collect());
+                let target: Option<Vec<bool>> =
+                    parts.filter(|p| p.len() == loaded.cloud.len()).map(|p| {
+                        p.iter()
+                            .map(|&c| crate::mesh::is_body_part_code(c))
+                            .collect()
+                    });
                 models
                     .iter()
                     .map(|set| {

@@ -30,6 +30,26 @@ pub enum Part {
     Other,
 }
 
+/// The per-point `part` code of a labelled cloud file (the `part` property of PLY files;
+/// `afford synth` writes it, `afford eval` scores segmentation against it): 0 other (legs,
+/// frames, floor, walls), 1 seat, 2 backrest, 3 armrest, 4 headrest, 5 lying surface.
+pub fn part_code(p: Part) -> f64 {
+    match p {
+        Part::Other => 0.0,
+        Part::Seat => 1.0,
+        Part::Backrest => 2.0,
+        Part::Armrest => 3.0,
+        Part::Headrest => 4.0,
+        Part::LyingSurface => 5.0,
+    }
+}
+
+/// Whether a per-point `part` code ([`part_code`]) is a surface a body uses (seat,
+/// backrest, armrest, headrest or lying surface), not [`Part::Other`].
+pub fn is_body_part_code(code: f64) -> bool {
+    (1.0..=5.0).contains(&code)
+}
+
 /// A triangle mesh in metres (world frame, z up) with one [`Part`] label per triangle.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
@@ -478,6 +498,14 @@ fn part_index(p: Part) -> usize {
 mod tests {
     use super::*;
     use std::f64::consts::PI;
+
+    #[test]
+    fn only_the_surfaces_a_body_uses_have_body_part_codes() {
+        for p in PART_ORDER {
+            assert_eq!(is_body_part_code(part_code(p)), p != Part::Other, "{p:?}");
+        }
+        assert!(!is_body_part_code(6.0) && !is_body_part_code(f64::NAN));
+    }
 
     fn approx(a: f64, b: f64, tol: f64) -> bool {
         (a - b).abs() <= tol

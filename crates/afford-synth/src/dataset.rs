@@ -35,8 +35,8 @@
 //!   on both sides of the 25° and 15° borders — and one may as well curl up or let the feet
 //!   hang over an arm.
 //!
-//! Per-point `part` codes: 0 other (legs, frames, floor, walls), 1 seat, 2 backrest,
-//! 3 armrest, 4 headrest, 5 lying surface.
+//! Per-point `part` codes ([`afford::mesh::part_code`]): 0 other (legs, frames, floor,
+//! walls), 1 seat, 2 backrest, 3 armrest, 4 headrest, 5 lying surface.
 //!
 //! Scene kinds: `full` (whole model sampled over its surface with light noise, with a
 //! floor patch), `view` (one depth view including the floor), `wall` (object with its back
@@ -60,7 +60,7 @@ use super::furniture::{
 };
 use afford::cloud::{self, CloudError};
 use afford::mesh::ply::{read_mesh_ply, MeshError};
-use afford::mesh::{sample_surface, Mesh, Part};
+use afford::mesh::{part_code, sample_surface, Mesh, Part};
 
 /// What went wrong generating a dataset.
 #[derive(Debug, thiserror::Error)]
@@ -1002,18 +1002,6 @@ pub(super) fn relabel_lying(m: &mut Mesh) {
         if *p == Part::Seat {
             *p = Part::LyingSurface;
         }
-    }
-}
-
-/// The per-point `part` code (see the module documentation).
-pub fn part_code(p: Part) -> f64 {
-    match p {
-        Part::Other => 0.0,
-        Part::Seat => 1.0,
-        Part::Backrest => 2.0,
-        Part::Armrest => 3.0,
-        Part::Headrest => 4.0,
-        Part::LyingSurface => 5.0,
     }
 }
 
