@@ -6,11 +6,11 @@ use std::path::Path;
 
 use afford::cloud;
 use afford::detect::{detect, detect_all, prepare, DetectConfig};
-use afford::heightmap::HeightMap;
-use afford::hypotheses::hypotheses;
-use afford::run::load_models;
-use afford::scene::Scene;
-use afford::synth::{scene_cloud, sofa, SofaParams};
+use afford::method::heightmap::HeightMap;
+use afford::method::hypotheses::hypotheses;
+use afford::method::scene::Scene;
+use afford::model::set::load_models;
+use afford_synth::{scene_cloud, sofa, SofaParams};
 use criterion::{criterion_group, criterion_main, Criterion};
 
 fn stages(c: &mut Criterion) {
@@ -28,7 +28,7 @@ fn stages(c: &mut Criterion) {
         1.75,
     )
     .unwrap();
-    let all = afford::run::ModelChoice::default().load().unwrap();
+    let all = afford::model::set::ModelChoice::default().load().unwrap();
     let cfg = DetectConfig::default();
     let mut g = c.benchmark_group("room");
     g.sample_size(10);

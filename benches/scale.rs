@@ -4,7 +4,7 @@
 //! `chair_view` (one depth view of an armchair, 100k-300k points), `room_view` (one depth
 //! view of a furnished room corner, 200k-300k points), `room_scan` (the whole room
 //! sampled from its surfaces, about 1M points) and `big_floor` (one chair on a
-//! 200 m x 200 m floor); see `afford::synth::scenes`.
+//! 200 m x 200 m floor); see `afford_synth::scenes`.
 //!
 //! Every stage alone (PLY read, height map, hypotheses, scene, the distance field over
 //! the whole occupied box, fitting, unfolding, segmentation) and the default run end to
@@ -16,14 +16,14 @@
 
 use afford::cloud;
 use afford::detect::{best_at, detect_all, prepare, DetectConfig};
-use afford::fit::fit;
-use afford::hypotheses::hypotheses;
-use afford::model_set::Model;
-use afford::run::ModelChoice;
-use afford::scene::Scene;
-use afford::select::segment;
-use afford::synth::scenes::speed_scenes;
-use afford::unfold::unfold;
+use afford::method::fit::fit;
+use afford::method::hypotheses::hypotheses;
+use afford::method::scene::Scene;
+use afford::method::select::segment;
+use afford::method::unfold::unfold;
+use afford::model::set::Model;
+use afford::model::set::ModelChoice;
+use afford_synth::scenes::speed_scenes;
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::Point3;
 
@@ -38,7 +38,7 @@ fn stages(c: &mut Criterion) {
         cloud::write_ply_points(&path, &cloud.points, &[], true).unwrap();
         g.bench_function("load_ply", |b| b.iter(|| cloud::load(&path).unwrap()));
         g.bench_function("heightmap", |b| {
-            b.iter(|| afford::heightmap::HeightMap::from_cloud(&cloud, &cfg.heightmap))
+            b.iter(|| afford::method::heightmap::HeightMap::from_cloud(&cloud, &cfg.heightmap))
         });
         g.bench_function("scene", |b| b.iter(|| Scene::new(&cloud, &cfg.scene)));
         if name != "big_floor" {

@@ -4,9 +4,9 @@
 //! `cargo run --release --example cell_rates -- cloud.ply [sitting|lying] [height]`.
 //! The cloud must already be in the detector's frame (metres, z up, floor at z = 0).
 use afford::detect::DetectConfig;
-use afford::heightmap::HeightMap;
-use afford::hypotheses::rate;
-use afford::model_set::{load_agent, load_hierarchy, Source, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
+use afford::method::heightmap::HeightMap;
+use afford::method::hypotheses::rate;
+use afford::model::set::{load_agent, load_hierarchy, Source, BUILTIN_AGENTS, BUILTIN_HIERARCHIES};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

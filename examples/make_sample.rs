@@ -1,6 +1,6 @@
 //! Writes data/sample/room.ply: an armchair, a chair at a table, a stool against a wall and
 //! a three-seat sofa, sampled from their surfaces (the committed sample of README).
-use afford::synth::*;
+use afford_synth::*;
 fn main() {
     let s = StoolParams::default();
     let meshes = vec![

@@ -4,16 +4,16 @@
 use nalgebra::Point3;
 use rayon::prelude::*;
 
-use crate::agent::{Agent, Cylinder};
 use crate::cloud::PointCloud;
-use crate::fit::{fit, ContactConfig, Fit};
-use crate::heightmap::{HeightMap, HeightMapConfig};
-use crate::hierarchy::Hierarchy;
-use crate::hypotheses::{hypotheses, Hypothesis};
-use crate::model_set::Model;
-use crate::scene::{Scene, SceneConfig};
-use crate::select::{segment, suppress, SegmentConfig};
-use crate::unfold::{unfold, Unfolded};
+use crate::method::fit::{fit, ContactConfig, Fit};
+use crate::method::heightmap::{HeightMap, HeightMapConfig};
+use crate::method::hypotheses::{hypotheses, Hypothesis};
+use crate::method::scene::{Scene, SceneConfig};
+use crate::method::select::{segment, suppress, SegmentConfig};
+use crate::method::unfold::{unfold, Unfolded};
+use crate::model::agent::{Agent, Cylinder};
+use crate::model::hierarchy::Hierarchy;
+use crate::model::set::Model;
 
 /// The scene-level numbers of a run (not per hierarchy). Defaults carry their reasons.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,7 +47,7 @@ impl Default for DetectConfig {
 impl DetectConfig {
     /// The defaults for a scene of `voxel_size` metres: the numbers defined as fractions
     /// of the voxel ([`CONTACT_VOXELS`], [`GROW_VOXELS`]) follow it. The caller checks the
-    /// size (see [`crate::settings::VOXEL_RANGE`]).
+    /// size (the command line checks it against its voxel range).
     pub fn for_voxel(voxel_size: f64) -> Self {
         DetectConfig {
             heightmap: HeightMapConfig::default(),

@@ -11,7 +11,7 @@ use nalgebra::{Matrix4, Point3};
 use crate::cloud::{keep_finite, FrameOptions, FrameReport};
 use crate::detect::{detect_all, DetectConfig};
 use crate::input::{load_input, to_input, Input, InputError, InputOptions};
-use crate::model_set::Model;
+use crate::model::set::Model;
 use crate::report::FileReport;
 
 /// One input's detection, with the links back to the caller's rows.
@@ -121,7 +121,7 @@ fn detect_in(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::run::ModelChoice;
+    use crate::model::set::ModelChoice;
 
     /// A seat-height box top (0.45 m) on a floor, 1 cm apart: something to sit on.
     fn stool() -> Vec<Point3<f64>> {

@@ -29,11 +29,11 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::cloud;
-use crate::detect::detect_all;
+use crate::detect::{detect_all, DetectConfig};
+use crate::input::InputOptions;
+use crate::model::set::{ids as ids_of, load_set, Model, ModelChoice};
 use crate::model::ModelError;
-use crate::model_set::{ids as ids_of, load_set, Model};
 use crate::report::{self, FileReport};
-use crate::settings::{ModelChoice, Settings};
 
 /// What went wrong before any file could be scored.
 #[derive(Debug, thiserror::Error)]
@@ -60,7 +60,7 @@ pub enum EvalError {
     Model(#[from] ModelError),
     /// Saved detect outputs (`--from`) could not be read.
     #[error(transparent)]
-    Saved(#[from] crate::batch::BatchError),
+    Saved(#[from] crate::report::saved::SavedError),
 }
 
 /// One row of a labels file.
@@ -487,15 +487,17 @@ fn setup(labels_csv: &Path, choice: &ModelChoice) -> Result<Setup, EvalError> {
 }
 
 /// Runs detection on every file of `labels_csv` (paths relative to it) with every body of
-/// `settings` (each agent at each height, with every hierarchy), reading the files and
-/// building the scene as `settings` says, and scores the answers (see the module
+/// `models` (each agent at each height, with every hierarchy), reading the files as
+/// `input` says and building the scene as `cfg` says, and scores the answers (see the module
 /// documentation). Files run in parallel (rayon); `progress` shows a progress bar on stderr.
 pub fn evaluate(
     labels_csv: &Path,
-    settings: &Settings,
+    models: &ModelChoice,
+    cfg: &DetectConfig,
+    input: &InputOptions,
     progress: bool,
 ) -> Result<Evaluation, EvalError> {
-    let setup = setup(labels_csv, &settings.models)?;
+    let setup = setup(labels_csv, models)?;
     let bodies = setup.bodies();
     let Setup {
         models, rows, ids, ..
@@ -505,8 +507,6 @@ pub fn evaluate(
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let cfg = &settings.detect;
-    let input = &settings.input;
     let outcomes: Vec<FileOutcome> = rows
         .par_iter()
         .map(|row| {
@@ -522,9 +522,12 @@ pub fn evaluate(
             };
             let out = loaded.map(|loaded| {
                 // Part labels only line up with the points if nothing was dropped.
-                let target: Option<Vec<bool>> = parts
-                    .filter(|p| p.len() == loaded.cloud.len())
-                    .map(|p| p.iter().map(|&c| (1.0..=5.0).contains(&c)).collect());
+                let target: Option<Vec<bool>> =
+                    parts.filter(|p| p.len() == loaded.cloud.len()).map(|p| {
+                        p.iter()
+                            .map(|&c| crate::mesh::is_body_part_code(c))
+                            .collect()
+                    });
                 models
                     .iter()
                     .map(|set| {
@@ -561,7 +564,7 @@ pub fn evaluate(
 }
 
 /// Scores saved `afford detect` outputs (`--json` files, `--summary` CSV files, `--out-dir`
-/// folders: see [`crate::batch::read_saved`]) against `labels_csv`, as [`evaluate`] would
+/// folders: see [`crate::report::saved::read_saved`]) against `labels_csv`, as [`evaluate`] would
 /// score running detection with the same models, without the segmentation IoU. A labelled
 /// file is matched to the saved file whose path ends with its `file` cell; a labelled file
 /// not saved, or saved without a run of one of the bodies of `models`, counts as failed.
@@ -578,11 +581,11 @@ pub fn evaluate_saved(
         ids,
         ..
     } = setup;
-    let saved = crate::batch::read_saved(saved)?;
+    let saved = crate::report::saved::read_saved(saved)?;
     let outcomes: Vec<FileOutcome> = rows
         .iter()
         .map(|row| {
-            let s = crate::batch::find_saved(&saved, &row.file, &row.path)?;
+            let s = crate::report::saved::find_saved(&saved, &row.file, &row.path)?;
             bodies
                 .iter()
                 .map(|(agent, h)| {

@@ -8,9 +8,16 @@
 //! key is shown (`joint.knee_l.parent`) and where it is in the document (array elements by
 //! position, so that of two joints with the same name the right one is found); the line is
 //! then looked up in the document's spans.
+//!
+//! The models: the body ([`agent`]), the affordance hierarchies ([`hierarchy`]) and the
+//! bodies at their heights with every hierarchy ([`set`]).
+
+pub mod agent;
+pub mod hierarchy;
+pub mod set;
 
 use std::collections::HashMap;
-use std::ops::Range;
+use std::ops::{Range, RangeInclusive};
 use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
@@ -400,6 +407,18 @@ impl Source<'_> {
 
 /// 1-based number of the `nth` (from 0) line of `text` that contains `needle`, for tests
 /// that check the line an error names.
+/// Checks a length `value` (metres) against `range`; the error says `what` is outside it.
+pub fn check_range(value: f64, range: &RangeInclusive<f64>, what: &str) -> Result<f64, String> {
+    if value.is_finite() && range.contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!(
+            "{what} {value} m is outside {:?}-{:?} m",
+            range.start(),
+            range.end()
+        ))
+    }
+}
 #[cfg(test)]
 pub(crate) fn line_of(text: &str, needle: &str, nth: usize) -> usize {
     text.lines()

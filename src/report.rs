@@ -3,13 +3,22 @@
 //! temporary file beside it and renamed into place, so nothing half-written is left.
 //!
 //! Numbers are printed with fixed decimals so that the same input gives the same bytes.
+//! Beside the tables: pictures ([`render`]), the agents as meshes ([`agent_mesh`], [`glb`])
+//! the atomic file writes every writer uses ([`atomic`]), and reading saved outputs back
+//! ([`saved`]).
+
+pub mod agent_mesh;
+pub mod atomic;
+pub mod glb;
+pub mod render;
+pub mod saved;
 
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
 use crate::detect::{Detection, Outcome, Stats};
-use crate::model_set::Model;
+use crate::model::set::Model;
 
 /// The result of one input file over every model of the run, as it goes into the outputs.
 #[derive(Debug, Clone)]
@@ -71,7 +80,7 @@ impl FileReport {
         FileReport {
             file,
             dropped_non_finite,
-            ids: crate::model_set::ids(models),
+            ids: crate::model::set::ids(models),
             runs,
             detections,
             labels,
@@ -113,7 +122,7 @@ fn round(x: f64, d: i32) -> f64 {
 
 /// The JSON document of `afford detect --json` (and of each `--out-dir` file): version
 /// [`JSON_VERSION`], one entry per input cloud. [`to_json`] writes it and
-/// [`crate::batch::read_saved`] reads it, with these same types. Numbers are rounded as
+/// [`saved::read_saved`] reads it, with these same types. Numbers are rounded as
 /// written: positions, scores and joint positions to 4 decimals, heights to 3, angles to 2.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Document {

@@ -6,10 +6,11 @@
 
 use std::path::{Path, PathBuf};
 
-use afford::agent::Agent;
 use afford::detect::{detect, DetectConfig, Outcome};
-use afford::hierarchy::Hierarchy;
-use afford::synth::*;
+use afford::mesh::{Mesh, Part};
+use afford::model::agent::Agent;
+use afford::model::hierarchy::Hierarchy;
+use afford_synth::*;
 use nalgebra::Point3;
 
 /// The hierarchy under test. Angles in degrees, lengths in metres unless "fraction of H".
@@ -83,8 +84,12 @@ fn write(dir: &tempfile::TempDir, text: &str) -> PathBuf {
 
 /// The built-in agent at body height `height` and the perching hierarchy loaded from a file.
 fn models(height: f64) -> (Agent, Hierarchy) {
-    let agent = Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), height)
-        .expect("the built-in agent loads");
+    let agent = Agent::from_toml(
+        afford::model::set::BUILTIN_AGENT,
+        Path::new("human.toml"),
+        height,
+    )
+    .expect("the built-in agent loads");
     let dir = tempfile::tempdir().unwrap();
     let h = Hierarchy::load(&write(&dir, PERCHING), &agent).unwrap_or_else(|e| panic!("{e}"));
     (agent, h)
@@ -165,8 +170,12 @@ fn a_low_chair_is_no_perch() {
 
 #[test]
 fn a_broken_custom_hierarchy_is_refused_with_file_line_and_key() {
-    let agent =
-        Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap();
+    let agent = Agent::from_toml(
+        afford::model::set::BUILTIN_AGENT,
+        Path::new("human.toml"),
+        1.75,
+    )
+    .unwrap();
     let dir = tempfile::tempdir().unwrap();
     let bad = PERCHING.replace(
         "theta1 = 60.0, theta2 = 140.0",
@@ -192,8 +201,12 @@ fn a_broken_custom_hierarchy_is_refused_with_file_line_and_key() {
 fn the_examples_of_docs_models_md_load() {
     let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/models.md"))
         .unwrap();
-    let agent =
-        Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap();
+    let agent = Agent::from_toml(
+        afford::model::set::BUILTIN_AGENT,
+        Path::new("human.toml"),
+        1.75,
+    )
+    .unwrap();
     let blocks: Vec<&str> = doc
         .split("```toml\n")
         .skip(1)
@@ -217,8 +230,8 @@ fn the_examples_of_docs_models_md_load() {
 /// The colour of the first vertex of the posed-agent mesh of `o`'s detections, drawn with
 /// the legend of `h`.
 fn mesh_colour(o: &Outcome, h: &Hierarchy) -> [u8; 3] {
-    let legend = afford::render::Legend::of([h]);
-    let bytes = afford::agent_mesh::agent_mesh_bytes(&o.detections, &legend);
+    let legend = afford::report::render::Legend::of([h]);
+    let bytes = afford::report::agent_mesh::agent_mesh_bytes(&o.detections, &legend);
     let body = bytes
         .windows(11)
         .position(|w| w == b"end_header\n")
@@ -233,15 +246,25 @@ fn a_new_hierarchy_draws_in_its_own_colours() {
     assert!(perches(&o));
     // Without a legend: the first colour of the node palette, not the grey of the unknown.
     let (_, h) = models(1.75);
-    assert_eq!(mesh_colour(&o, &h), afford::hierarchy::NODE_PALETTE[0]);
-    assert_ne!(mesh_colour(&o, &h), afford::render::OTHER_AFFORDANCE);
+    assert_eq!(
+        mesh_colour(&o, &h),
+        afford::model::hierarchy::NODE_PALETTE[0]
+    );
+    assert_ne!(
+        mesh_colour(&o, &h),
+        afford::report::render::OTHER_AFFORDANCE
+    );
     // With one: the file's colour.
     let text = PERCHING.replace(
         "suppression_radius = 0.25",
         "legend = [{ id = \"perching\", colour = [10, 20, 30] }]\nsuppression_radius = 0.25",
     );
-    let agent =
-        Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap();
+    let agent = Agent::from_toml(
+        afford::model::set::BUILTIN_AGENT,
+        Path::new("human.toml"),
+        1.75,
+    )
+    .unwrap();
     let dir = tempfile::tempdir().unwrap();
     let h = Hierarchy::load(&write(&dir, &text), &agent).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(mesh_colour(&o, &h), [10, 20, 30]);

@@ -4,8 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
-use afford::agent::Agent;
-use afford::hierarchy::Hierarchy;
+use afford::model::agent::Agent;
+use afford::model::hierarchy::Hierarchy;
 
 /// Writes `bytes` to `name` in a fresh temporary directory.
 fn file(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> PathBuf {
@@ -15,7 +15,12 @@ fn file(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> PathBuf {
 }
 
 fn builtin() -> Agent {
-    Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap()
+    Agent::from_toml(
+        afford::model::set::BUILTIN_AGENT,
+        Path::new("human.toml"),
+        1.75,
+    )
+    .unwrap()
 }
 
 fn corpus(target: &str) -> Vec<(String, Vec<u8>)> {

@@ -5,15 +5,16 @@
 
 use std::path::Path;
 
-use afford::agent::Agent;
 use afford::cloud::PointCloud;
 use afford::detect::{detect, detect_all, prepare, DetectConfig, Outcome};
-use afford::fit::fit;
-use afford::hierarchy::Hierarchy;
-use afford::hypotheses::Hypothesis;
-use afford::model_set::{load_set, Source};
-use afford::synth::*;
-use afford::unfold::unfold;
+use afford::mesh::{Mesh, Part};
+use afford::method::fit::fit;
+use afford::method::hypotheses::Hypothesis;
+use afford::method::unfold::unfold;
+use afford::model::agent::Agent;
+use afford::model::hierarchy::Hierarchy;
+use afford::model::set::{load_set, Source};
+use afford_synth::*;
 use nalgebra::{Point3, UnitQuaternion, Vector3};
 
 fn lying(height: f64) -> (Agent, Hierarchy) {

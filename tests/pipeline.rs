@@ -4,11 +4,12 @@
 
 use std::path::Path;
 
-use afford::agent::Agent;
 use afford::cloud::PointCloud;
 use afford::detect::{detect, DetectConfig, Outcome};
-use afford::hierarchy::Hierarchy;
-use afford::synth::*;
+use afford::mesh::{Mesh, Part};
+use afford::model::agent::Agent;
+use afford::model::hierarchy::Hierarchy;
+use afford_synth::*;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
 fn models(height: f64) -> (Agent, Hierarchy) {

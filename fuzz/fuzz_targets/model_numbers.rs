@@ -9,10 +9,10 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
-use afford::agent::Agent;
 use afford::cloud::PointCloud;
 use afford::detect::{detect, DetectConfig};
-use afford::hierarchy::Hierarchy;
+use afford::model::agent::Agent;
+use afford::model::hierarchy::Hierarchy;
 use libfuzzer_sys::fuzz_target;
 use nalgebra::Point3;
 
@@ -75,8 +75,8 @@ fn edit(text: &str, n: usize, v: f64) -> String {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let mut agent_text = afford::run::BUILTIN_AGENT.to_string();
-    let mut sit_text = afford::run::BUILTIN_SITTING.to_string();
+    let mut agent_text = afford::model::set::BUILTIN_AGENT.to_string();
+    let mut sit_text = afford::model::set::BUILTIN_SITTING.to_string();
     for chunk in data.chunks_exact(9).take(4) {
         let v = f64::from_le_bytes(chunk[1..9].try_into().unwrap());
         let which = chunk[0] as usize;

@@ -4,14 +4,14 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
-use afford::agent::Agent;
-use afford::hierarchy::Hierarchy;
+use afford::model::agent::Agent;
+use afford::model::hierarchy::Hierarchy;
 use libfuzzer_sys::fuzz_target;
 
 fn builtin() -> &'static Agent {
     static AGENT: OnceLock<Agent> = OnceLock::new();
     AGENT.get_or_init(|| {
-        Agent::from_toml(afford::run::BUILTIN_AGENT, Path::new("human.toml"), 1.75)
+        Agent::from_toml(afford::model::set::BUILTIN_AGENT, Path::new("human.toml"), 1.75)
             .expect("builtin agent")
     })
 }

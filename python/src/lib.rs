@@ -15,10 +15,10 @@ use afford::cloud::{parse_matrix, CloudError, FloorMode, FrameOptions, Units};
 use afford::detect::{DetectConfig, Detection, Stats};
 use afford::embed::{self, Detected};
 use afford::input::{load_input, InputError, InputOptions};
+use afford::model::set::Model;
+use afford::model::set::ModelChoice;
 use afford::model::ModelError;
-use afford::model_set::Model;
 use afford::report::{self, FileReport, RunStats};
-use afford::run::ModelChoice;
 use nalgebra::Point3;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray2};
@@ -410,7 +410,7 @@ fn documents(results: Vec<Bound<'_, PyDict>>) -> PyResult<(String, String, Strin
 /// Runs the `afford` command line on `argv` (program name first); returns its exit code.
 #[pyfunction]
 fn cli_main(py: Python<'_>, argv: Vec<OsString>) -> u8 {
-    py.detach(move || afford::cli::main(argv))
+    py.detach(move || afford_cli::cli::main(argv))
 }
 
 /// The native half of the `afford` package.

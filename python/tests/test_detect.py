@@ -100,7 +100,7 @@ def test_a_result_pickles(result):
 
 def camera_copy(world: np.ndarray) -> np.ndarray:
     """The sample seen from a camera 1.6 m up, 3 m in front of the room, pitched 25 deg
-    down (x right, y down, z forward), in millimetres: tests/cli.rs's copy."""
+    down (x right, y down, z forward), in millimetres: crates/afford-cli/tests/cli.rs's copy."""
     direction = np.array([-0.9, 0.2, -0.42])
     z = direction / np.linalg.norm(direction)
     x = np.cross([0.0, 0.0, 1.0], z)

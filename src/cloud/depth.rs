@@ -92,7 +92,7 @@ pub fn write_depth_png(path: &Path, width: u32, depth: &[u16]) -> std::io::Resul
         let data: Vec<u8> = depth.iter().flat_map(|d| d.to_be_bytes()).collect();
         w.write_image_data(&data).map_err(std::io::Error::other)?;
     }
-    crate::atomic::write_bytes(path, &bytes)
+    crate::report::atomic::write_bytes(path, &bytes)
 }
 
 #[cfg(test)]

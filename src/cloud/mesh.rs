@@ -15,8 +15,8 @@ use nalgebra::Point3;
 use std::borrow::Cow;
 
 use super::{CloudError, PointCloud};
-use crate::synth::meshio::{read_mesh_ply, MeshError};
-use crate::synth::{sample_surface, Mesh, Part};
+use crate::mesh::ply::{read_mesh_ply, MeshError};
+use crate::mesh::{sample_surface, Mesh, Part};
 
 /// [`sample_mesh`] never draws more than about this many points: a higher density is
 /// lowered to fit.

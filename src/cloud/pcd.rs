@@ -636,7 +636,7 @@ pub fn write_pcd(path: &Path, points: &[Point3<f64>]) -> Result<(), CloudError> 
             bytes.extend_from_slice(&(*c as f32).to_le_bytes());
         }
     }
-    crate::atomic::write_bytes(path, &bytes).map_err(|source| CloudError::Write {
+    crate::report::atomic::write_bytes(path, &bytes).map_err(|source| CloudError::Write {
         path: path.to_path_buf(),
         source,
     })

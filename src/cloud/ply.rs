@@ -789,7 +789,7 @@ pub(super) fn shorten(s: &str) -> String {
 /// property per entry of `extra` (its name and one value per point, e.g. `detection`).
 ///
 /// `binary` selects `binary_little_endian`, otherwise `ascii`. The file is written as
-/// [`crate::atomic::write_with`] writes: through a temporary file renamed into place, so
+/// [`crate::report::atomic::write_with`] writes: through a temporary file renamed into place, so
 /// readers never see a half-written file (the temporary file is removed on error).
 pub fn write_ply_points(
     path: &Path,
@@ -837,12 +837,11 @@ pub(crate) fn write_ply_typed(
             format!("'{}' is not one line", shorten(c)),
         ));
     }
-    crate::atomic::write_with(path, |w| write_body(w, points, extra, comments, binary)).map_err(
-        |source| CloudError::Write {
+    crate::report::atomic::write_with(path, |w| write_body(w, points, extra, comments, binary))
+        .map_err(|source| CloudError::Write {
             path: path.to_path_buf(),
             source,
-        },
-    )
+        })
 }
 
 fn write_body(

@@ -4,8 +4,9 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use afford::detect::{DetectConfig, DEFAULT_VOXEL};
 use afford::eval::evaluate;
-use afford::settings::{ModelChoice, Settings};
+use afford::model::set::ModelChoice;
 
 /// `(height in mm, affordance) -> F` of the main (non-doubtful) rows of an eval CSV.
 pub fn baseline(path: &Path) -> BTreeMap<(u32, String), f64> {
@@ -36,16 +37,12 @@ pub fn drops_below(
     base: &BTreeMap<(u32, String), f64>,
     heights: &[f64],
 ) -> Vec<String> {
-    let settings = Settings::new(
-        ModelChoice {
-            heights: heights.to_vec(),
-            ..Default::default()
-        },
-        None,
-        Default::default(),
-    )
-    .unwrap();
-    let ev = evaluate(labels, &settings, false).unwrap();
+    let models = ModelChoice {
+        heights: heights.to_vec(),
+        ..Default::default()
+    };
+    let cfg = DetectConfig::for_voxel(DEFAULT_VOXEL);
+    let ev = evaluate(labels, &models, &cfg, &Default::default(), false).unwrap();
     assert!(ev.failed.is_empty(), "{:?}", ev.failed);
     let mut drops = Vec::new();
     for hr in &ev.heights {

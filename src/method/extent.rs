@@ -1,0 +1,284 @@
+//! The guard stage before the grids: the height map (section 4.1) is dense over the
+//! cloud's extent in x and y, and the voxel distance field (section 4.2) keeps one slot
+//! per 32^3 cells of its box (its distances are computed only where a body asks for them),
+//! so part of their memory follows the bounding box, not the points. This stage makes the
+//! extent the detector sees follow the points:
+//!
+//! 1. every coordinate must be finite and within [`ExtentConfig::max_coordinate`] (beyond,
+//!    f64 cannot resolve the 5 mm contact steps and grid indices overflow);
+//! 2. stray points are removed by construction: the points are binned into coarse cubes
+//!    (a hash map, so memory follows the points), cubes touching each other form connected
+//!    regions, and the regions holding the bulk of the points are kept;
+//! 3. the grid memory the remaining extent needs is checked against
+//!    [`ExtentConfig::grid_budget`]; over it, the file is refused with one line, and a
+//!    batch goes on with the next file.
+//!
+//! World frame: metres, z up. Nothing here changes a cloud that has no stray region.
+
+use std::borrow::Cow;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use nalgebra::Point3;
+
+use crate::cloud::PointCloud;
+use crate::detect::DetectConfig;
+
+/// Limits of the guard stage. Defaults carry their reasons.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExtentConfig {
+    /// Edge of the coarse cubes that decide which points are connected, metres.
+    pub cell: f64,
+    /// A connected region with fewer than this share of the points is stray (the largest
+    /// region is always kept).
+    pub stray_share: f64,
+    /// Largest accepted |coordinate|, metres.
+    pub max_coordinate: f64,
+    /// Most bytes the grids (height map, distance field) of one file may take.
+    pub grid_budget: u64,
+    /// Edge of the cube around a body whose distance-field chunks must fit the budget
+    /// together, metres.
+    pub reach: f64,
+}
+
+impl Default for ExtentConfig {
+    fn default() -> Self {
+        ExtentConfig {
+            // 1 m: about the reach of a limb; a gap wider than this cannot be bridged by a body part.
+            cell: 1.0,
+            // 1 %: a stray point or sensor ghost is far below it; a chair in a room scan is above it.
+            stray_share: 0.01,
+            // 1e7 m (10,000 km, the range of UTM northings): f64 still resolves 2e-9 m there.
+            max_coordinate: 1e7,
+            // 2 GiB: a 25 m x 25 m x 3 m scene at 2 cm voxels fits; half of a small 4 GB machine.
+            grid_budget: 2 << 30,
+            // 2 m: a 1.85 m adult lying, or sitting with the legs stretched, fits in it.
+            reach: 2.0,
+        }
+    }
+}
+
+/// Bytes in a GiB, for messages.
+const GIB: f64 = (1u64 << 30) as f64;
+/// Bytes per height-map cell: the `Option<f64>` height and the two `usize` column offsets
+/// of the per-cell sort (`heightmap::HeightMap::from_cloud`).
+const HEIGHTMAP_CELL_BYTES: f64 =
+    (std::mem::size_of::<Option<f64>>() + 2 * std::mem::size_of::<usize>()) as f64;
+
+/// Why a cloud is refused before the grids are built. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ExtentError {
+    /// A coordinate is not finite or too large to be indexed.
+    #[error(
+        "{path}: point {point}: coordinate {value:.3e} m is beyond the {limit:e} m the grids can \
+         index (check --units and --transform)"
+    )]
+    Coordinate {
+        /// The file.
+        path: PathBuf,
+        /// Index of the point in the cloud.
+        point: usize,
+        /// The offending coordinate, metres.
+        value: f64,
+        /// [`ExtentConfig::max_coordinate`].
+        limit: f64,
+    },
+    /// The grids over the kept extent would take more than the budget.
+    #[error(
+        "{path}: the cloud spans {:.1} x {:.1} x {:.1} m ({dropped} stray points dropped); its \
+         grids would take {:.1} GiB, over the {:.1} GiB limit (check --units, crop the cloud, \
+         or use a coarser --voxel)",
+        extent[0], extent[1], extent[2], *need as f64 / GIB, *budget as f64 / GIB
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Extent of the kept points along x, y, z, metres.
+        extent: [f64; 3],
+        /// Stray points dropped before measuring it.
+        dropped: usize,
+        /// Bytes the grids would take.
+        need: u64,
+        /// [`ExtentConfig::grid_budget`].
+        budget: u64,
+    },
+}
+
+/// The cloud the grids are built from, and how many stray points were left out of it.
+#[derive(Debug, Clone)]
+pub struct Guarded<'a> {
+    /// The points kept (the input itself when nothing was dropped).
+    pub cloud: Cow<'a, PointCloud>,
+    /// Stray points left out.
+    pub dropped: usize,
+}
+
+/// Runs the guard stage on `cloud` (world frame, metres) read from `path`: refuses
+/// coordinates that cannot be indexed, drops stray regions, and refuses an extent whose
+/// grids exceed the budget.
+pub fn guard<'a>(
+    path: &Path,
+    cloud: &'a PointCloud,
+    detect: &DetectConfig,
+    cfg: &ExtentConfig,
+) -> Result<Guarded<'a>, ExtentError> {
+    if let Some((point, value)) = cloud.points.iter().enumerate().find_map(|(i, p)| {
+        p.coords
+            .iter()
+            .find(|c| !c.is_finite() || c.abs() > cfg.max_coordinate)
+            .map(|&c| (i, c))
+    }) {
+        return Err(ExtentError::Coordinate {
+            path: path.to_path_buf(),
+            point,
+            value,
+            limit: cfg.max_coordinate,
+        });
+    }
+    let keep = bulk(&cloud.points, cfg.cell, cfg.stray_share);
+    let dropped = keep.iter().filter(|k| !**k).count();
+    let kept: Cow<'a, PointCloud> = if dropped == 0 {
+        Cow::Borrowed(cloud)
+    } else {
+        Cow::Owned(PointCloud::new(
+            cloud
+                .points
+                .iter()
+                .zip(&keep)
+                .filter(|(_, k)| **k)
+                .map(|(p, _)| *p)
+                .collect(),
+        ))
+    };
+    if let Some((lo, hi)) = kept.bounds() {
+        let extent = [hi.x - lo.x, hi.y - lo.y, hi.z - lo.z];
+        let need = grid_bytes(extent, detect, cfg.reach);
+        if need > cfg.grid_budget as f64 {
+            return Err(ExtentError::TooLarge {
+                path: path.to_path_buf(),
+                extent,
+                dropped,
+                need: need.min(u64::MAX as f64) as u64,
+                budget: cfg.grid_budget,
+            });
+        }
+    }
+    Ok(Guarded {
+        cloud: kept,
+        dropped,
+    })
+}
+
+/// Bytes the height map and the distance field take over an extent (metres along x, y, z)
+/// while a body moves within a cube of edge `reach` metres ([`crate::method::scene::field_bytes`]),
+/// as an upper bound (computed in f64, so any extent gives a number).
+pub fn grid_bytes(extent: [f64; 3], cfg: &DetectConfig, reach: f64) -> f64 {
+    let hc = cfg.heightmap.cell;
+    let map = (extent[0] / hc + 1.0).floor() * (extent[1] / hc + 1.0).floor();
+    map * HEIGHTMAP_CELL_BYTES + crate::method::scene::field_bytes(extent, &cfg.scene, reach)
+}
+
+/// Per point, whether it lies in a connected region of coarse cubes (edge `cell`, touching
+/// by face, edge or corner) that holds at least `share` of the points, or in the largest.
+fn bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
+    let key = |p: &Point3<f64>| p.coords.map(|c| (c / cell).floor() as i64);
+    let mut cells: HashMap<[i64; 3], usize> = HashMap::new();
+    let mut of_point = Vec::with_capacity(points.len());
+    let mut keys: Vec<[i64; 3]> = Vec::new();
+    for p in points {
+        let k = key(p);
+        let k = [k.x, k.y, k.z];
+        let n = cells.len();
+        let id = *cells.entry(k).or_insert_with(|| {
+            keys.push(k);
+            n
+        });
+        of_point.push(id);
+    }
+    // Union-find over the occupied cells.
+    let mut parent: Vec<usize> = (0..keys.len()).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for (i, k) in keys.iter().enumerate() {
+        for d in 0..27i64 {
+            let o = [d % 3 - 1, d / 3 % 3 - 1, d / 9 - 1];
+            let n = [k[0] + o[0], k[1] + o[1], k[2] + o[2]];
+            if let Some(&j) = cells.get(&n) {
+                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
+                if a != b {
+                    parent[a.max(b)] = a.min(b);
+                }
+            }
+        }
+    }
+    let roots: Vec<usize> = (0..keys.len()).map(|i| root(&mut parent, i)).collect();
+    let mut count = vec![0usize; keys.len()];
+    for &c in &of_point {
+        count[roots[c]] += 1;
+    }
+    let largest = count.iter().copied().max().unwrap_or(0);
+    let least = share * points.len() as f64;
+    of_point
+        .iter()
+        .map(|&c| {
+            let n = count[roots[c]];
+            n == largest || n as f64 >= least
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn room() -> Vec<Point3<f64>> {
+        // A 4 m x 3 m floor sampled every 5 cm.
+        let mut pts = Vec::new();
+        for i in 0..80 {
+            for j in 0..60 {
+                pts.push(Point3::new(i as f64 * 0.05, j as f64 * 0.05, 0.0));
+            }
+        }
+        pts
+    }
+
+    #[test]
+    fn a_cloud_without_strays_is_passed_through_untouched() {
+        let c = PointCloud::new(room());
+        let g = guard(
+            Path::new("r.ply"),
+            &c,
+            &DetectConfig::default(),
+            &ExtentConfig::default(),
+        )
+        .unwrap();
+        assert_eq!(g.dropped, 0);
+        assert!(matches!(g.cloud, Cow::Borrowed(_)));
+    }
+
+    #[test]
+    fn grid_bytes_match_the_grids_built() {
+        // 1 m x 1 m x 0 m: height map 21 x 21 cells (16 bytes of height and two 8-byte
+        // column offsets each); field box (50 + 2 + 30)^2 x (0 + 2 + 30) cells, computed
+        // at once (two f32 grids).
+        let b = grid_bytes([1.0, 1.0, 0.0], &DetectConfig::default(), 2.0);
+        assert_eq!(b, 21.0 * 21.0 * 32.0 + 82.0 * 82.0 * 32.0 * 8.0);
+        // 40 m x 40 m x 0 m: field box 2032^2 x 32 cells, over the dense limit: 64^2
+        // chunks of 32^3 cells (a 24-byte slot each); a 2 m cube around a body spans
+        // (ceil(100 / 32) + 1)^3 = 5^3 chunks of 128 KiB.
+        let b = grid_bytes([40.0, 40.0, 0.0], &DetectConfig::default(), 2.0);
+        assert_eq!(b, 801.0 * 801.0 * 32.0 + 4096.0 * 24.0 + 125.0 * 131072.0);
+        // A 200 m x 200 m floor no longer counts its whole box of voxels (4e9 cells).
+        let floor = grid_bytes([200.0, 200.0, 1.0], &DetectConfig::default(), 2.0);
+        assert!(floor < 0.6 * GIB, "{}", floor / GIB);
+        // A 2 mm voxel makes the cube around one body alone 4 GiB.
+        let mut fine = DetectConfig::default();
+        fine.scene.voxel_size = 0.002;
+        assert!(grid_bytes([1.0, 1.0, 0.0], &fine, 2.0) > 4.0 * GIB);
+    }
+}

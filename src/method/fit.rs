@@ -1,0 +1,280 @@
+//! Initial agent fitting (section 4.2): at a hypothesis, try headings around the
+//! hypothesis heading, discard those where the agent in its initial pose collides before
+//! it is lowered, lower it until it touches the scene, and rate it by the stability
+//! score of Eq. 1.
+
+use nalgebra::Point3;
+
+use crate::method::hypotheses::Hypothesis;
+use crate::method::scene::Scene;
+use crate::model::agent::{Agent, Cylinder, Placement, Posture};
+use crate::model::hierarchy::Hierarchy;
+
+/// The agent resting at a hypothesis in its initial pose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fit {
+    /// Where the agent's root joint ended up, and its heading.
+    pub placement: Placement,
+    /// The initial pose H_A.
+    pub posture: Posture,
+    /// Stability score s of Eq. 1, in (0, 1].
+    pub stability: f64,
+}
+
+/// Numbers of the fitting that are not the hierarchy's: how finely contact is located.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactConfig {
+    /// Contact positions are located to within this much motion, metres.
+    pub resolution: f64,
+}
+
+/// Headings (radians) to try at a hypothesis: the offsets of the hierarchy around its
+/// heading, or every `fallback_yaw_step` when it has none.
+pub fn headings(h: &Hierarchy, hyp: &Hypothesis) -> Vec<f64> {
+    match hyp.heading {
+        Some(yaw) => h.fit.yaw_offsets.iter().map(|o| yaw + o).collect(),
+        None => all_round(h.fit.fallback_yaw_step),
+    }
+}
+
+fn all_round(step: f64) -> Vec<f64> {
+    let n = (std::f64::consts::TAU / step).round().max(1.0) as usize;
+    (0..n)
+        .map(|i| i as f64 * std::f64::consts::TAU / n as f64)
+        .collect()
+}
+
+/// Fits the agent at `hyp` (section 4.2) and returns every stable fit, one per heading that
+/// was free before lowering, touched the scene within the allowed drop, and is stable.
+/// When no heading around the hypothesis heading is free, all round headings are tried
+/// (a gradient off by 90 degrees must not lose the place). When still nothing fits, the
+/// hierarchy's `deferred_links` (limbs a node unfolds later, such as arms raised for an
+/// armrest) are left out of the collision tests and every heading is tried again: a limb
+/// that will move must not lose the seat.
+pub fn fit(
+    agent: &Agent,
+    h: &Hierarchy,
+    scene: &Scene,
+    hyp: &Hypothesis,
+    contact: &ContactConfig,
+) -> Vec<Fit> {
+    let fits = fit_checking(agent, h, scene, hyp, contact, &h.fit.unchecked_links);
+    if !fits.is_empty() || h.fit.deferred_links.is_empty() {
+        return fits;
+    }
+    let mut unchecked = h.fit.unchecked_links.clone();
+    unchecked.extend(&h.fit.deferred_links);
+    fit_checking(agent, h, scene, hyp, contact, &unchecked)
+}
+
+/// [`fit`] with the links `unchecked` left out of the collision tests: the headings
+/// around the hypothesis heading, then all round if none of them was free.
+fn fit_checking(
+    agent: &Agent,
+    h: &Hierarchy,
+    scene: &Scene,
+    hyp: &Hypothesis,
+    contact: &ContactConfig,
+    unchecked: &[usize],
+) -> Vec<Fit> {
+    let first = headings(h, hyp);
+    let (fits, any_free) = fit_headings(agent, h, scene, hyp, &first, contact, unchecked);
+    if any_free || hyp.heading.is_none() {
+        return fits;
+    }
+    let tried = first;
+    let rest: Vec<f64> = all_round(h.fit.fallback_yaw_step)
+        .into_iter()
+        .filter(|y| tried.iter().all(|t| angle_between(*t, *y) > 1e-6))
+        .collect();
+    fit_headings(agent, h, scene, hyp, &rest, contact, unchecked).0
+}
+
+fn angle_between(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(std::f64::consts::TAU);
+    d.min(std::f64::consts::TAU - d)
+}
+
+/// Fits at each heading, collision-testing every link but `unchecked`; also says whether
+/// any heading was free at the start.
+fn fit_headings(
+    agent: &Agent,
+    h: &Hierarchy,
+    scene: &Scene,
+    hyp: &Hypothesis,
+    yaws: &[f64],
+    contact: &ContactConfig,
+    unchecked: &[usize],
+) -> (Vec<Fit>, bool) {
+    let posture = &h.initial;
+    let mut frames = Vec::new();
+    // Height of the lowest point of the stability links below the root joint.
+    let probe = Placement {
+        position: Point3::origin(),
+        yaw: 0.0,
+    };
+    agent.forward_kinematics(&probe, posture, &mut frames);
+    let bottom = agent
+        .cylinders(&frames, |j| h.fit.stability_links.contains(&j))
+        .iter()
+        .map(|c| c.a.z.min(c.b.z) - c.radius)
+        .fold(f64::INFINITY, f64::min);
+    let bottom = if bottom.is_finite() { bottom } else { 0.0 };
+    let start_z = hyp.top + h.fit.start_clearance - bottom;
+    let drop = (hyp.top - hyp.position.z) + h.fit.start_clearance + h.fit.max_drop;
+    let mut out = Vec::new();
+    let mut any_free = false;
+    for &yaw in yaws {
+        let at = |z: f64| Placement {
+            position: Point3::new(hyp.position.x, hyp.position.y, z),
+            yaw,
+        };
+        let mut parts: Vec<Cylinder> = Vec::new();
+        let mut f = Vec::new();
+        let mut pose = |t: f64, out: &mut Vec<Cylinder>| {
+            agent.forward_kinematics(&at(start_z - t * drop), posture, &mut f);
+            *out = agent.cylinders(&f, |j| !unchecked.contains(&j));
+        };
+        pose(0.0, &mut parts);
+        if parts
+            .iter()
+            .any(|c| scene.clearance(c) <= 0.0 && scene.intersects(c))
+        {
+            continue;
+        }
+        any_free = true;
+        let Some(t) = scene.first_contact(&mut pose, drop, contact.resolution) else {
+            continue;
+        };
+        // Rest just above the contact found (the bisection returns the touching side).
+        let z = start_z - (t * drop - contact.resolution).max(0.0);
+        let placement = at(z);
+        agent.forward_kinematics(&placement, posture, &mut frames);
+        let s = stability(agent, h, scene, &frames);
+        if s >= h.fit.min_stability {
+            out.push(Fit {
+                placement,
+                posture: posture.clone(),
+                stability: s,
+            });
+        }
+    }
+    (out, any_free)
+}
+
+/// The stability score of Eq. 1: exp(-(mean d_i)^2 / (2 sigma_d^2)) over samples d_i of
+/// the distances from the stability links' surfaces to the scene (metres).
+pub fn stability(
+    agent: &Agent,
+    h: &Hierarchy,
+    scene: &Scene,
+    frames: &[nalgebra::Isometry3<f64>],
+) -> f64 {
+    let mut sum = 0.0;
+    let mut n = 0usize;
+    for c in agent.cylinders(frames, |j| h.fit.stability_links.contains(&j)) {
+        let len = (c.b - c.a).norm();
+        let k = (len / h.fit.sample_spacing).ceil().max(1.0) as usize;
+        for i in 0..=k {
+            let p = c.a + (c.b - c.a) * (i as f64 / k as f64);
+            sum += scene.surface_distance(&p, c.radius);
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return 0.0;
+    }
+    let mean = sum / n as f64;
+    (-(mean * mean) / (2.0 * h.fit.sigma_d * h.fit.sigma_d)).exp()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloud::PointCloud;
+    use crate::method::scene::SceneConfig;
+    use crate::model::hierarchy::Hierarchy;
+    use crate::model::set::{BUILTIN_AGENT, BUILTIN_SITTING};
+    use std::path::Path;
+
+    fn models() -> (Agent, Hierarchy) {
+        let a = Agent::from_toml(BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap();
+        let h = Hierarchy::from_toml(BUILTIN_SITTING, Path::new("sitting.toml"), &a).unwrap();
+        (a, h)
+    }
+
+    /// A 1 x 1 m seat top of points 1 cm apart at z = 0.45 (its voxels reach 0.44-0.46).
+    fn seat() -> Scene {
+        let mut pts = Vec::new();
+        for i in 0..100 {
+            for j in 0..100 {
+                pts.push(Point3::new(
+                    -0.5 + i as f64 * 0.01,
+                    -0.5 + j as f64 * 0.01,
+                    0.45,
+                ));
+            }
+        }
+        Scene::new(
+            &PointCloud::new(pts),
+            &SceneConfig {
+                voxel_size: 0.02,
+                floor: true,
+                field_margin: 0.3,
+            },
+        )
+    }
+
+    /// Eq. 1 with the pelvis bottom `gap` metres above the seat's voxels.
+    fn stability_at(gap: f64) -> f64 {
+        let (a, h) = models();
+        let s = seat();
+        let pelvis_radius = a.joints[0].link.as_ref().unwrap().radius;
+        let mut frames = Vec::new();
+        let place = Placement {
+            position: Point3::new(0.0, 0.0, 0.46 + gap + pelvis_radius),
+            yaw: 0.0,
+        };
+        a.forward_kinematics(&place, &h.initial, &mut frames);
+        stability(&a, &h, &s, &frames)
+    }
+
+    #[test]
+    fn stability_follows_eq_1() {
+        // sigma_d = 0.03 m: resting gives ~1, one sigma exp(-1/2) = 0.61, 10 cm ~0.
+        assert!(stability_at(0.0) > 0.9, "{}", stability_at(0.0));
+        let one_sigma = stability_at(0.03);
+        assert!((one_sigma - (-0.5f64).exp()).abs() < 0.15, "{one_sigma}");
+        assert!(stability_at(0.10) < 0.01, "{}", stability_at(0.10));
+    }
+
+    #[test]
+    fn the_agent_is_lowered_onto_the_seat() {
+        let (a, h) = models();
+        let s = seat();
+        let hyp = Hypothesis {
+            cell: (0, 0),
+            position: Point3::new(0.0, 0.0, 0.45),
+            top: 0.45,
+            availability: 1.0,
+            heading: Some(0.0),
+            memberships: [1.0; 3],
+        };
+        let fits = fit(&a, &h, &s, &hyp, &ContactConfig { resolution: 0.005 });
+        assert_eq!(
+            fits.len(),
+            h.fit.yaw_offsets.len(),
+            "every heading is free and stable on a flat seat"
+        );
+        let f = &fits[0];
+        let mut frames = Vec::new();
+        a.forward_kinematics(&f.placement, &f.posture, &mut frames);
+        let pelvis = a.cylinders(&frames, |j| j == 0)[0];
+        let bottom = pelvis.a.z - pelvis.radius;
+        // The seat's voxels end at 0.46 m; contact is located to 5 mm.
+        assert!(
+            (0.455..=0.47).contains(&bottom),
+            "pelvis bottom at {bottom}"
+        );
+    }
+}

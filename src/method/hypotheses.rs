@@ -1,0 +1,265 @@
+//! Position hypotheses (section 4.1): the torso template slides over the height map, the
+//! fuzzy rule rates each cell, and the height-gradient descent gives a heading.
+
+use nalgebra::{Matrix3, Point3, Vector3};
+
+use crate::method::fuzzy::{rule, Trapezoid};
+use crate::method::heightmap::HeightMap;
+use crate::model::hierarchy::{HypothesisRule, Orientation};
+
+/// A promising position for the agent.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hypothesis {
+    /// Cell `(ix, iy)` of the height map.
+    pub cell: (usize, usize),
+    /// Cell centre in x-y and mean height under the template in z, metres (world).
+    pub position: Point3<f64>,
+    /// Highest height under the template, metres.
+    pub top: f64,
+    /// Crisp availability (first of maximum, Fig. 5d), the arrow length of Fig. 4c.
+    pub availability: f64,
+    /// Heading (radians about z, 0 = +x) from the gradient descent; `None` where the
+    /// neighbourhood is flat and no heading is preferred.
+    pub heading: Option<f64>,
+    /// The three memberships: discontinuity low, roughness low, height comfortable.
+    pub memberships: [f64; 3],
+}
+
+/// Rates every valid cell of `map` with the rule of section 4.1 for an agent of body
+/// height `body_height` (metres) and returns the available ones in row-major cell order.
+pub fn hypotheses(
+    map: &HeightMap,
+    rule_: &HypothesisRule,
+    orientation: Orientation,
+    body_height: f64,
+) -> Vec<Hypothesis> {
+    let template = map.disc(rule_.template_diameter * body_height / 2.0);
+    let neighbourhood = map.disc(rule_.gradient_radius * body_height);
+    let height = rule_.height.map(|t| t.scaled(body_height));
+    // Only every `step`-th cell in x and y is tried (grid-aligned, so deterministic).
+    let step = rule_.spacing.map_or(1, |s| {
+        ((s * body_height / map.cell).round() as usize).max(1)
+    });
+    let mut out = Vec::new();
+    for iy in (0..map.ny).step_by(step) {
+        for ix in (0..map.nx).step_by(step) {
+            let Some(Rating {
+                mean,
+                top,
+                memberships,
+            }) = rate(map, ix, iy, &template, height.as_ref(), rule_)
+            else {
+                continue;
+            };
+            let verdict =
+                rule_
+                    .available
+                    .defuzzify(rule(memberships[0], memberships[1], memberships[2]));
+            if !verdict.available {
+                continue;
+            }
+            let heading =
+                descent(map, ix, iy, &neighbourhood, rule_.flat_gradient).map(
+                    |d| match orientation {
+                        Orientation::Parallel => d,
+                        Orientation::Orthogonal => d + std::f64::consts::FRAC_PI_2,
+                    },
+                );
+            let (x, y) = map.centre(ix, iy);
+            out.push(Hypothesis {
+                cell: (ix, iy),
+                position: Point3::new(x, y, mean),
+                top,
+                availability: verdict.value,
+                heading,
+                memberships,
+            });
+        }
+    }
+    out
+}
+
+/// What the fuzzy rule of section 4.1 sees at one cell: the template's statistics and the
+/// three memberships.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rating {
+    /// Mean height of the valid cells under the template, metres.
+    pub mean: f64,
+    /// Highest height under the template, metres.
+    pub top: f64,
+    /// Discontinuity low, roughness low, height comfortable.
+    pub memberships: [f64; 3],
+}
+
+/// Rates cell `(ix, iy)` of `map` with the torso `template` (cell offsets) and the
+/// `height` set already in metres; `None` if the cell is invalid.
+pub fn rate(
+    map: &HeightMap,
+    ix: usize,
+    iy: usize,
+    template: &[(isize, isize)],
+    height: Option<&Trapezoid>,
+    rule_: &HypothesisRule,
+) -> Option<Rating> {
+    map.get(ix as isize, iy as isize)?;
+    let (mut n, mut sum, mut sum2, mut top) = (0usize, 0.0, 0.0, f64::MIN);
+    for &(dx, dy) in template {
+        if let Some(h) = map.get(ix as isize + dx, iy as isize + dy) {
+            n += 1;
+            sum += h;
+            sum2 += h * h;
+            top = top.max(h);
+        }
+    }
+    let discontinuity = 1.0 - n as f64 / template.len() as f64;
+    let mean = sum / n as f64;
+    let roughness = (sum2 / n as f64 - mean * mean).max(0.0).sqrt();
+    Some(Rating {
+        mean,
+        top,
+        memberships: [
+            rule_.discontinuity.membership(discontinuity),
+            rule_.roughness.membership(roughness),
+            height.map_or(1.0, |t| t.membership(mean)),
+        ],
+    })
+}
+
+/// Direction (radians about z) of steepest descent of the least-squares plane through the
+/// valid cells of the neighbourhood; `None` if the slope is below `flat` (m/m).
+pub fn descent(
+    map: &HeightMap,
+    ix: usize,
+    iy: usize,
+    neighbourhood: &[(isize, isize)],
+    flat: f64,
+) -> Option<f64> {
+    // Normal equations of h = a + gx * dx + gy * dy, dx and dy in metres.
+    let mut ata = Matrix3::<f64>::zeros();
+    let mut atb = Vector3::<f64>::zeros();
+    for &(dx, dy) in neighbourhood {
+        if let Some(h) = map.get(ix as isize + dx, iy as isize + dy) {
+            let row = Vector3::new(1.0, dx as f64 * map.cell, dy as f64 * map.cell);
+            ata += row * row.transpose();
+            atb += row * h;
+        }
+    }
+    let sol = ata.try_inverse()? * atb;
+    let (gx, gy) = (sol.y, sol.z);
+    if (gx * gx + gy * gy).sqrt() < flat {
+        return None;
+    }
+    Some((-gy).atan2(-gx))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::method::fuzzy::{Availability, Low, Trapezoid};
+
+    fn rule_() -> HypothesisRule {
+        HypothesisRule {
+            template_diameter: 0.1,
+            gradient_radius: 0.1,
+            flat_gradient: 0.05,
+            discontinuity: Low {
+                full: 0.1,
+                zero: 0.4,
+            },
+            roughness: Low {
+                full: 0.01,
+                zero: 0.04,
+            },
+            height: Some(Trapezoid {
+                a: 0.2,
+                b: 0.3,
+                c: 0.5,
+                d: 0.6,
+            }),
+            available: Availability { rise: [0.3, 0.7] },
+            spacing: None,
+        }
+    }
+
+    fn map(f: impl Fn(usize, usize) -> Option<f64>) -> HeightMap {
+        let (nx, ny) = (20, 20);
+        let heights = (0..nx * ny).map(|i| f(i % nx, i / nx)).collect();
+        HeightMap {
+            x0: 0.0,
+            y0: 0.0,
+            cell: 0.05,
+            nx,
+            ny,
+            heights,
+        }
+    }
+
+    #[test]
+    fn a_seat_high_plateau_is_available_and_the_floor_is_not() {
+        // Body height 1.0: template radius 0.05 m (5 cells), seat of 8 x 8 cells at 0.45 m.
+        let m = map(|x, y| {
+            Some(if (6..14).contains(&x) && (6..14).contains(&y) {
+                0.45
+            } else {
+                0.0
+            })
+        });
+        let h = hypotheses(&m, &rule_(), Orientation::Parallel, 1.0);
+        assert!(h.iter().any(|h| h.cell == (10, 10)));
+        assert!(
+            h.iter()
+                .all(|h| (7..13).contains(&h.cell.0) && (7..13).contains(&h.cell.1)),
+            "only seat interior"
+        );
+        let c = h.iter().find(|h| h.cell == (10, 10)).unwrap();
+        assert!((c.position.z - 0.45).abs() < 1e-12);
+        assert_eq!(c.memberships, [1.0, 1.0, 1.0]);
+        // The seat is flat: no preferred heading.
+        assert_eq!(c.heading, None);
+    }
+
+    #[test]
+    fn spacing_tries_every_nth_cell_of_the_grid() {
+        let m = map(|x, y| {
+            Some(if (6..14).contains(&x) && (6..14).contains(&y) {
+                0.45
+            } else {
+                0.0
+            })
+        });
+        let all = hypotheses(&m, &rule_(), Orientation::Parallel, 1.0);
+        // 0.1 H at H = 1 m over 0.05 m cells: every second cell.
+        let sparse = HypothesisRule {
+            spacing: Some(0.1),
+            ..rule_()
+        };
+        let some = hypotheses(&m, &sparse, Orientation::Parallel, 1.0);
+        assert!(some.iter().all(|h| h.cell.0 % 2 == 0 && h.cell.1 % 2 == 0));
+        let even: Vec<_> = all
+            .iter()
+            .filter(|h| h.cell.0 % 2 == 0 && h.cell.1 % 2 == 0)
+            .collect();
+        assert_eq!(some.len(), even.len());
+        assert!(!some.is_empty() && some.len() < all.len());
+    }
+
+    #[test]
+    fn holes_make_a_place_unavailable() {
+        let m = map(|x, y| if (x + y) % 2 == 0 { Some(0.45) } else { None });
+        assert!(hypotheses(&m, &rule_(), Orientation::Parallel, 1.0).is_empty());
+    }
+
+    #[test]
+    fn heading_faces_down_the_slope() {
+        // Height rises towards -x (a backrest on the -x side): the descent faces +x.
+        let m = map(|x, _| Some(1.0 - 0.01 * x as f64));
+        let d = descent(&m, 10, 10, &m.disc(0.2), 0.05).unwrap();
+        assert!(d.abs() < 1e-9, "heading {d}");
+        let m = map(|_, y| Some(0.01 * y as f64));
+        let d = descent(&m, 10, 10, &m.disc(0.2), 0.05).unwrap();
+        assert!(
+            (d + std::f64::consts::FRAC_PI_2).abs() < 1e-9,
+            "heading {d}"
+        );
+    }
+}

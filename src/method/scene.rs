@@ -1,0 +1,1275 @@
+//! The scene the agent is fitted into (section 4.2): the point cloud voxelised into a
+//! parry3d `Voxels` shape for exact collision tests, a Euclidean distance field over the
+//! same voxels that bounds how far a body part is from anything (so exact tests are only
+//! made where contact is near), and the floor, the half-space z <= 0 (paper section 3.1:
+//! agent and scene share the ground plane).
+//!
+//! Memory follows the points and the region the agent reaches, not the bounding box: the
+//! occupied voxels are kept as sorted rows, and the distance field is computed exactly but
+//! lazily, chunk by chunk, where a body part first asks for it.
+//!
+//! World frame: metres, z up. Parry works in f32 in a local frame re-centred on the cloud.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::OnceLock;
+
+use nalgebra::{Point3, Vector3};
+use parry3d::math::{IVector, Pose, Rotation, Vector};
+use parry3d::shape::{Cylinder as ParryCylinder, Voxels};
+
+use crate::cloud::PointCloud;
+use crate::model::agent::Cylinder;
+
+/// How the scene is built.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SceneConfig {
+    /// Voxel edge length, metres.
+    pub voxel_size: f64,
+    /// Whether the floor z <= 0 is solid even where the cloud has no floor points.
+    pub floor: bool,
+    /// Free border around the voxels over which the distance field is kept, metres.
+    pub field_margin: f64,
+}
+
+/// Voxelised scene with a distance field and an optional solid floor.
+#[derive(Debug)]
+pub struct Scene {
+    voxel: f64,
+    /// World position of the local origin used for f32 geometry.
+    origin: Vector3<f64>,
+    voxels: Option<Voxels>,
+    field: Option<DistanceField>,
+    floor: bool,
+    /// World bounds of the occupied voxels (cube extents included).
+    occupied: Option<(Point3<f64>, Point3<f64>)>,
+    count: usize,
+}
+
+/// Bytes the distance field of a scene spanning `extent` (metres along x, y, z, the
+/// occupied voxels' span) takes at most while a body moves within a cube of edge `reach`
+/// metres: a box of at most [`DENSE_CELLS`] is computed at once; a larger one takes one
+/// chunk slot per chunk of its box and the chunks covering that cube (an upper bound, in
+/// f64 so any extent gives a number). Chunks beyond the cube are
+/// computed only where bodies elsewhere ask for them (at most [`KEPT_CHUNKS`] kept).
+pub fn field_bytes(extent: [f64; 3], cfg: &SceneConfig, reach: f64) -> f64 {
+    let v = cfg.voxel_size;
+    let margin = 2.0 * (cfg.field_margin / v).ceil();
+    let dims = extent.map(|e| (e / v).floor() + 2.0 + margin);
+    let cells: f64 = dims.iter().product();
+    if cells <= DENSE_CELLS as f64 {
+        // Computed at once: two f32 grids while the transform runs.
+        return cells * 2.0 * std::mem::size_of::<f32>() as f64;
+    }
+    let chunks: f64 = dims.iter().map(|d| (d / CHUNK as f64).ceil()).product();
+    let around = ((reach / v / CHUNK as f64).ceil() + 1.0).powi(3);
+    let chunk_bytes = (CHUNK_CELLS * std::mem::size_of::<f32>()) as f64;
+    chunks * std::mem::size_of::<OnceLock<Box<[f32]>>>() as f64 + around * chunk_bytes
+}
+
+impl Scene {
+    /// Voxelises `cloud` (world frame, metres).
+    pub fn new(cloud: &PointCloud, cfg: &SceneConfig) -> Scene {
+        let v = cfg.voxel_size;
+        let origin = cloud.bounds().map_or(Vector3::zeros(), |(lo, hi)| {
+            ((lo.coords + hi.coords) / 2.0).map(|c| (c / v).round() * v)
+        });
+        let mut keys: Vec<[i64; 3]> = cloud
+            .points
+            .iter()
+            .map(|p| {
+                let l = (p.coords - origin) / v;
+                cell_of(&l)
+            })
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        if keys.is_empty() {
+            return Scene {
+                voxel: v,
+                origin,
+                voxels: None,
+                field: None,
+                floor: cfg.floor,
+                occupied: None,
+                count: 0,
+            };
+        }
+        let mut lo = keys[0];
+        let mut hi = keys[0];
+        for k in &keys {
+            for a in 0..3 {
+                lo[a] = lo[a].min(k[a]);
+                hi[a] = hi[a].max(k[a]);
+            }
+        }
+        let ivs: Vec<IVector> = keys
+            .iter()
+            .map(|k| IVector::new(k[0] as i32, k[1] as i32, k[2] as i32))
+            .collect();
+        let voxels = Voxels::new(Vector::splat(v as f32), &ivs);
+        let margin = (cfg.field_margin / v).ceil() as i64;
+        let fmin = [lo[0] - margin, lo[1] - margin, lo[2] - margin];
+        let dims = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1 + 2 * margin) as usize);
+        let field = DistanceField::new(fmin, dims, &keys, v);
+        let world =
+            |k: [i64; 3]| Point3::new(k[0] as f64 * v, k[1] as f64 * v, k[2] as f64 * v) + origin;
+        let occupied = Some((world(lo), world([hi[0] + 1, hi[1] + 1, hi[2] + 1])));
+        Scene {
+            voxel: v,
+            origin,
+            voxels: Some(voxels),
+            field: Some(field),
+            floor: cfg.floor,
+            occupied,
+            count: keys.len(),
+        }
+    }
+
+    /// Number of occupied voxels.
+    pub fn voxel_count(&self) -> usize {
+        self.count
+    }
+
+    /// Voxel edge length, metres.
+    pub fn voxel_size(&self) -> f64 {
+        self.voxel
+    }
+
+    /// A lower bound on the distance (metres) from point `p` (world) to the surface of any
+    /// occupied voxel; may be negative when `p` is close to or inside one.
+    pub fn point_clearance(&self, p: &Point3<f64>) -> f64 {
+        let (Some(field), Some((lo, hi))) = (&self.field, &self.occupied) else {
+            return f64::INFINITY;
+        };
+        let v = self.voxel;
+        let half_diag = v * 3f64.sqrt() / 2.0;
+        let l = (p.coords - self.origin) / v;
+        let k = cell_of(&l);
+        match field.get(k) {
+            // Quantising p to its cell centre costs half a diagonal; the voxel's extent another.
+            Some(d) => d as f64 - 2.0 * half_diag,
+            None => {
+                let dx = (lo.x - p.x).max(p.x - hi.x).max(0.0);
+                let dy = (lo.y - p.y).max(p.y - hi.y).max(0.0);
+                let dz = (lo.z - p.z).max(p.z - hi.z).max(0.0);
+                (dx * dx + dy * dy + dz * dz).sqrt()
+            }
+        }
+    }
+
+    /// A lower bound on the gap (metres) between the body part `c` and the scene (voxels and
+    /// floor); positive means certainly free, zero or negative means contact is possible.
+    pub fn clearance(&self, c: &Cylinder) -> f64 {
+        let floor = if self.floor {
+            floor_gap(c)
+        } else {
+            f64::INFINITY
+        };
+        if self.field.is_none() {
+            return floor;
+        }
+        let axis = c.b - c.a;
+        let len = axis.norm();
+        let n = (len / self.voxel).ceil().max(1.0) as usize;
+        let spacing = len / n as f64;
+        let mut best = f64::INFINITY;
+        for i in 0..=n {
+            let p = c.a + axis * (i as f64 / n as f64);
+            best = best.min(self.point_clearance(&p));
+        }
+        (best - spacing / 2.0 - c.radius).min(floor)
+    }
+
+    /// Exact test: does the body part `c` intersect an occupied voxel or the floor?
+    ///
+    /// The answer is parry3d's `intersection_test` of a cylinder against the `Voxels`
+    /// shape, which tests every occupied voxel in the cylinder's bounding box with GJK.
+    /// The same voxels are visited here (found in the sorted rows of occupied cells), but
+    /// voxels whose centre lies deep inside the cylinder, or
+    /// whose bounding sphere is clear of the cylinder's capsule, are decided by
+    /// geometry with a margin of [`DECIDE_MARGIN`]; only the voxels between are handed
+    /// to parry's GJK, with the poses parry itself would use.
+    pub fn intersects(&self, c: &Cylinder) -> bool {
+        if self.floor && floor_gap(c) < 0.0 {
+            return true;
+        }
+        let (Some(voxels), Some(field)) = (&self.voxels, &self.field) else {
+            return false;
+        };
+        let Some((pose, shape)) = self.parry_cylinder(c) else {
+            return false;
+        };
+        // Certainly touching: an axis point, away from the ends and the surface by the
+        // margin, lies in an occupied voxel (the cylinder holds a ball around it).
+        let axis = c.b - c.a;
+        let len = axis.norm();
+        if c.radius > DECIDE_MARGIN && len > 2.0 * DECIDE_MARGIN {
+            let n = (len / self.voxel).ceil() as usize;
+            let inner = len - 2.0 * DECIDE_MARGIN;
+            for i in 0..=n {
+                let p = c.a + axis * ((DECIDE_MARGIN + inner * i as f64 / n as f64) / len);
+                if field.occupied(cell_of(&((p.coords - self.origin) / self.voxel))) {
+                    return true;
+                }
+            }
+        }
+        use parry3d::query::QueryDispatcher;
+        use parry3d::shape::Shape;
+        // As parry's `intersection_test` and `intersection_test_voxels_shape` compute them.
+        let pos12 = Pose::IDENTITY.inv_mul(&pose);
+        let Some(aabb) = voxels
+            .local_aabb()
+            .intersection(&shape.compute_aabb(&pos12))
+        else {
+            return false;
+        };
+        let [mins, maxs] = voxels.voxel_range_intersecting_local_aabb(&aabb);
+        let lo = [mins.x as i64, mins.y as i64, mins.z as i64];
+        let hi = [maxs.x as i64, maxs.y as i64, maxs.z as i64];
+        let t = pos12.translation;
+        let u = pos12.rotation * Vector::Y;
+        let (t, u) = (
+            Vector3::new(t.x as f64, t.y as f64, t.z as f64),
+            Vector3::new(u.x as f64, u.y as f64, u.z as f64),
+        );
+        let (hh, r) = (shape.half_height as f64, shape.radius as f64);
+        let size = voxels.voxel_size();
+        let half_diag = (size.x as f64).hypot(size.y as f64).hypot(size.z as f64) / 2.0;
+        let centre =
+            |k: [i64; 3]| voxels.voxel_center(IVector::new(k[0] as i32, k[1] as i32, k[2] as i32));
+        // Where the voxel centred at `p` stands against the cylinder.
+        let clear2 = (r + half_diag + DECIDE_MARGIN).powi(2);
+        let inside2 = (r - DECIDE_MARGIN).max(0.0).powi(2);
+        let classify = |k: [i64; 3]| {
+            let p = centre(k);
+            let w = Vector3::new(p.x as f64, p.y as f64, p.z as f64) - t;
+            let along = w.dot(&u);
+            let perp2 = w.norm_squared() - along * along;
+            let beyond = (along.abs() - hh).max(0.0);
+            if perp2 + beyond * beyond > clear2 {
+                Side::Clear
+            } else if along.abs() < hh - DECIDE_MARGIN && perp2 < inside2 {
+                Side::Inside
+            } else {
+                Side::Boundary
+            }
+        };
+        let cuboid = parry3d::shape::Cuboid::new(size / 2.0);
+        field.any_occupied(lo, hi, |k| match classify(k) {
+            Side::Inside => true,
+            Side::Clear => false,
+            Side::Boundary => {
+                let pose12 = Pose::from_translation(-centre(k)) * pos12;
+                parry3d::query::DefaultQueryDispatcher
+                    .intersection_test(&pose12, &cuboid, &shape)
+                    .is_ok_and(|r| r.intersecting)
+            }
+        })
+    }
+
+    /// The same test made by parry3d alone (`intersection_test` of the cylinder against
+    /// the whole `Voxels` shape): the reference [`Scene::intersects`] must agree with.
+    pub fn intersects_parry(&self, c: &Cylinder) -> bool {
+        if self.floor && floor_gap(c) < 0.0 {
+            return true;
+        }
+        let Some(voxels) = &self.voxels else {
+            return false;
+        };
+        let Some((pose, shape)) = self.parry_cylinder(c) else {
+            return false;
+        };
+        parry3d::query::intersection_test(&Pose::IDENTITY, voxels, &pose, &shape)
+            .map(|r| r.intersecting)
+            .unwrap_or(false)
+    }
+
+    /// The body part as a parry cylinder and its pose in the local (f32) frame; `None` for
+    /// a part of no length.
+    fn parry_cylinder(&self, c: &Cylinder) -> Option<(Pose, ParryCylinder)> {
+        let axis = c.b - c.a;
+        let len = axis.norm();
+        if len < 1e-9 {
+            return None;
+        }
+        let mid = nalgebra::center(&c.a, &c.b).coords - self.origin;
+        let dir = axis / len;
+        let rot = Rotation::from_rotation_arc(
+            Vector::Y,
+            Vector::new(dir.x as f32, dir.y as f32, dir.z as f32),
+        );
+        let pose = Pose::from_parts(Vector::new(mid.x as f32, mid.y as f32, mid.z as f32), rot);
+        Some((
+            pose,
+            ParryCylinder::new((len / 2.0) as f32, c.radius as f32),
+        ))
+    }
+
+    /// The direction (unit, world) in which the scene falls away from the body part `c` where
+    /// it comes closest to it: the gradient of the distance field at the axis point nearest
+    /// to an occupied voxel. For a forearm lying on an armrest it points up; for one
+    /// touching a wall beside it, sideways. `None` with no voxels nearby (or only the floor,
+    /// whose normal is +z).
+    pub fn contact_normal(&self, c: &Cylinder) -> Option<Vector3<f64>> {
+        if self.floor && floor_gap(c) <= self.voxel {
+            return Some(Vector3::z());
+        }
+        let field = self.field.as_ref()?;
+        let v = self.voxel;
+        let key = |p: &Point3<f64>| {
+            let l = (p.coords - self.origin) / v;
+            cell_of(&l)
+        };
+        let axis = c.b - c.a;
+        let n = ((axis.norm() / v).ceil() as usize).max(1);
+        let (mut best, mut at) = (f32::INFINITY, None);
+        for i in 0..=n {
+            let p = c.a + axis * (i as f64 / n as f64);
+            if let Some(d) = field.get(key(&p)) {
+                if d < best {
+                    best = d;
+                    at = Some(key(&p));
+                }
+            }
+        }
+        let k = at?;
+        let g = |a: usize| {
+            let (mut lo, mut hi) = (k, k);
+            lo[a] -= 2;
+            hi[a] += 2;
+            match (field.get(lo), field.get(hi)) {
+                (Some(l), Some(h)) if l.is_finite() && h.is_finite() => (h - l) as f64,
+                _ => 0.0,
+            }
+        };
+        let grad = Vector3::new(g(0), g(1), g(2));
+        (grad.norm() > 1e-9).then(|| grad.normalize())
+    }
+
+    /// How far (metres) the scene lies straight below `p`: the drop to the first occupied
+    /// voxel or the floor, or `f64::INFINITY` when there is nothing below within `max`.
+    pub fn drop_below(&self, p: &Point3<f64>, max: f64) -> f64 {
+        let floor = if self.floor { p.z } else { f64::INFINITY };
+        let mut q = *p;
+        // March down by the clearance bound (never less than half a voxel).
+        while p.z - q.z <= max.min(floor) {
+            let clearance = self.point_clearance(&q);
+            if clearance <= self.voxel / 2.0 {
+                return p.z - q.z;
+            }
+            q.z -= clearance;
+        }
+        if floor <= max {
+            floor
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// Distance (metres, >= 0) from the surface of a body part of radius `radius` whose axis
+    /// passes through `p` to the nearest voxel or the floor: the d_i of Eq. 1.
+    pub fn surface_distance(&self, p: &Point3<f64>, radius: f64) -> f64 {
+        let floor = if self.floor {
+            p.z - radius
+        } else {
+            f64::INFINITY
+        };
+        // The field holds centre distances: take back the quantisation slack for a
+        // central estimate, and the half voxel to reach the voxel's face.
+        let d = match (&self.field, self.occupied) {
+            (Some(f), Some(_)) => {
+                let l = (p.coords - self.origin) / self.voxel;
+                match f.get(cell_of(&l)) {
+                    Some(d) => d as f64 - self.voxel / 2.0 - radius,
+                    None => self.point_clearance(p) - radius,
+                }
+            }
+            _ => f64::INFINITY,
+        };
+        d.min(floor).max(0.0)
+    }
+}
+
+impl Scene {
+    /// The first parameter `t` in [0, 1] at which a moving set of body parts touches the
+    /// scene, or `None` if it stays free. `motion(t, out)` writes the posed parts at `t`;
+    /// `speed` bounds how far (metres) any point of them moves per unit of `t`; contact is
+    /// located to within `resolution` metres of motion.
+    ///
+    /// Free space is crossed in steps as long as the distance field's clearance allows
+    /// (conservative advancement); exact parry3d tests are made only for parts whose
+    /// clearance bound is not positive, and the contact is refined by bisection.
+    pub fn first_contact(
+        &self,
+        mut motion: impl FnMut(f64, &mut Vec<Cylinder>),
+        speed: f64,
+        resolution: f64,
+    ) -> Option<f64> {
+        let mut parts = Vec::new();
+        let min_step = if speed > 0.0 { resolution / speed } else { 1.0 };
+        let mut touching = |t: f64, parts: &mut Vec<Cylinder>| -> (bool, f64) {
+            motion(t, parts);
+            let mut gap = f64::INFINITY;
+            let mut hit = false;
+            for c in parts.iter() {
+                let g = self.clearance(c);
+                gap = gap.min(g);
+                if g <= 0.0 && !hit && self.intersects(c) {
+                    hit = true;
+                }
+            }
+            (hit, gap)
+        };
+        let (mut free, mut t) = (None::<f64>, 0.0f64);
+        loop {
+            let (hit, gap) = touching(t, &mut parts);
+            if hit {
+                let Some(mut lo) = free else {
+                    return Some(t);
+                };
+                let mut hi = t;
+                while (hi - lo) * speed > resolution / 4.0 {
+                    let mid = 0.5 * (lo + hi);
+                    if touching(mid, &mut parts).0 {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                }
+                return Some(hi);
+            }
+            free = Some(t);
+            if t >= 1.0 {
+                return None;
+            }
+            let step = if gap > 0.0 && speed > 0.0 {
+                (gap / speed).max(min_step)
+            } else {
+                min_step
+            };
+            t = (t + step).min(1.0);
+        }
+    }
+}
+
+/// Geometric margin (metres) by which a voxel must be inside a cylinder, or clear of it,
+/// to be decided without GJK: a thousand times the f32 rounding of room-sized coordinates,
+/// so only voxels that GJK itself would decide the same way are skipped.
+const DECIDE_MARGIN: f64 = 1e-3;
+
+/// Where a voxel stands against a cylinder, by its centre.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Side {
+    /// Its bounding sphere is clear of the cylinder's capsule by the margin.
+    Clear,
+    /// Its centre is inside the cylinder by the margin.
+    Inside,
+    /// Neither: GJK decides.
+    Boundary,
+}
+
+/// `v.floor() as i64` without a call to libm's `floor` (x86-64 without SSE4.1 has no
+/// rounding instruction): the same value for every `v` (saturating as `as` does).
+fn floor_i64(v: f64) -> i64 {
+    let t = v as i64;
+    t.saturating_sub(((t as f64) > v) as i64)
+}
+
+/// The grid cell of a position given in voxel units (local frame).
+fn cell_of(l: &Vector3<f64>) -> [i64; 3] {
+    [floor_i64(l.x), floor_i64(l.y), floor_i64(l.z)]
+}
+
+/// Height of the lowest point of a cylinder above z = 0, metres (negative below the floor).
+fn floor_gap(c: &Cylinder) -> f64 {
+    let axis = c.b - c.a;
+    let len = axis.norm();
+    let sin = if len > 1e-12 {
+        (1.0 - (axis.z / len).powi(2)).max(0.0).sqrt()
+    } else {
+        1.0
+    };
+    c.a.z.min(c.b.z) - c.radius * sin
+}
+
+/// Edge of a distance-field chunk, cells: the unit in which distances are computed and
+/// kept. 32 cells (0.64 m at 2 cm) hold a seat or a limb's neighbourhood, so a fit reuses
+/// a few chunks; a chunk is 128 KiB of `f32`.
+const CHUNK: usize = 32;
+/// Cells cut per chunk (`CHUNK`^3).
+const CHUNK_CELLS: usize = CHUNK * CHUNK * CHUNK;
+/// Border (cells) first read around a chunk when its distances are computed: a quarter
+/// chunk, so cells within 0.18 m of a surface (where contacts are found) are decided in
+/// one cheap pass; a chunk with farther cells is computed again with a border as wide as
+/// the farthest distance found.
+const FIRST_PAD: usize = CHUNK / 4;
+/// Growth of the border when a pass finds no occupied cell for some cell.
+const PAD_GROWTH: usize = 4;
+/// Squared distance (cells) standing for "no occupied cell in reach" in the passes.
+const FAR: f32 = 1e20;
+/// Largest field box (cells) whose distances are computed at once, densely (8 bytes a cell
+/// while computed, 4 kept): 2^25 cells, 256 MiB, a 1M-point room scan at 2 cm; there one
+/// pass over the box costs about a third of the instructions of computing its chunks with
+/// their borders. Larger boxes are computed in chunks where they are used.
+const DENSE_CELLS: usize = 1 << 25;
+/// Most chunks kept at once: 512 MiB of distances. A 1M-point room scan at 2 cm touches
+/// about a fifth of that; past it, distances are computed cell by cell and not kept, so
+/// memory stays bounded and only time grows (the values are the same).
+const KEPT_CHUNKS: usize = (512 << 20) / (CHUNK_CELLS * std::mem::size_of::<f32>());
+
+/// Euclidean distances from cell centres to the nearest occupied voxel centre, over the
+/// box `min .. min + dims` (grid keys), computed lazily in chunks of [`CHUNK`]^3 cells:
+/// only the chunks queried are ever computed or stored, so memory follows the region the
+/// agent reaches, not the box. Each value is exact (the same `f32` a dense exact
+/// transform over the whole box gives: the square root of an integer squared distance in
+/// cells, times the voxel size); the occupied cells are kept as sorted rows along x.
+#[derive(Debug)]
+struct DistanceField {
+    /// Grid key of cell (0, 0, 0).
+    min: [i64; 3],
+    dims: [usize; 3],
+    /// Voxel edge, metres, in the precision of the stored distances.
+    voxel: f32,
+    /// Ids (`z * ny + y`) of the rows along x holding occupied cells, ascending.
+    rows: Vec<u64>,
+    /// Start of each row's cells in `xs` (one more entry than `rows`).
+    row_start: Vec<usize>,
+    /// x offsets of the occupied cells, ascending within each row.
+    xs: Vec<u32>,
+    /// Chunks per axis.
+    chunk_dims: [usize; 3],
+    /// Distances (metres), chunk by chunk (`(cz * cny + cy) * cnx + cx`), each laid out
+    /// `(z * CHUNK + y) * CHUNK + x`; computed on first use.
+    chunks: Vec<OnceLock<Box<[f32]>>>,
+    /// Chunks computed and kept so far.
+    kept: AtomicUsize,
+    /// The distances (metres) of a box of at most [`DENSE_CELLS`], all computed at once,
+    /// laid out `(y * nz + z) * nx + x`; `None` for a larger box (then `chunks` holds them).
+    dense: Option<Vec<f32>>,
+}
+
+impl DistanceField {
+    /// The field over the box `min .. min + dims` of the occupied voxel `keys` (all inside
+    /// the box), voxel edge `v` metres. Nothing is computed yet.
+    fn new(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]], v: f64) -> DistanceField {
+        Self::with_dense_limit(min, dims, keys, v, DENSE_CELLS)
+    }
+
+    /// [`Self::new`], computing the box at once when it has at most `dense_cells` cells.
+    fn with_dense_limit(
+        min: [i64; 3],
+        dims: [usize; 3],
+        keys: &[[i64; 3]],
+        v: f64,
+        dense_cells: usize,
+    ) -> DistanceField {
+        let cells = dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
+        let dense = cells
+            .is_some_and(|n| n <= dense_cells)
+            .then(|| dense::dense_distances(min, dims, keys, v));
+        let ny = dims[1] as u64;
+        let mut cells: Vec<(u64, u32)> = keys
+            .iter()
+            .map(|k| {
+                let o = [0, 1, 2].map(|a| (k[a] - min[a]) as u64);
+                (o[2] * ny + o[1], o[0] as u32)
+            })
+            .collect();
+        cells.sort_unstable();
+        cells.dedup();
+        let (mut rows, mut row_start, mut xs) = (Vec::new(), Vec::new(), Vec::new());
+        for (i, &(row, x)) in cells.iter().enumerate() {
+            if rows.last() != Some(&row) {
+                rows.push(row);
+                row_start.push(i);
+            }
+            xs.push(x);
+        }
+        row_start.push(xs.len());
+        let chunk_dims = dims.map(|d| d.div_ceil(CHUNK));
+        let slots = if dense.is_some() {
+            0
+        } else {
+            chunk_dims.iter().product()
+        };
+        let chunks = (0..slots).map(|_| OnceLock::new()).collect();
+        DistanceField {
+            min,
+            dims,
+            voxel: v as f32,
+            rows,
+            row_start,
+            xs,
+            chunk_dims,
+            chunks,
+            kept: AtomicUsize::new(0),
+            dense,
+        }
+    }
+
+    /// Offsets of grid key `k` in the box, or `None` outside it.
+    fn offsets(&self, k: [i64; 3]) -> Option<[usize; 3]> {
+        let mut o = [0usize; 3];
+        for a in 0..3 {
+            let i = k[a] - self.min[a];
+            if i < 0 || i as usize >= self.dims[a] {
+                return None;
+            }
+            o[a] = i as usize;
+        }
+        Some(o)
+    }
+
+    /// Distance (metres) from the centre of cell `k` to the nearest occupied cell centre;
+    /// `None` outside the box.
+    fn get(&self, k: [i64; 3]) -> Option<f32> {
+        let o = self.offsets(k)?;
+        if let Some(d) = &self.dense {
+            let [nx, _, nz] = self.dims;
+            return Some(d[(o[1] * nz + o[2]) * nx + o[0]]);
+        }
+        let c = o.map(|i| i / CHUNK);
+        let [cnx, cny, _] = self.chunk_dims;
+        let slot = &self.chunks[(c[2] * cny + c[1]) * cnx + c[0]];
+        let l = o.map(|i| i % CHUNK);
+        let at = (l[2] * CHUNK + l[1]) * CHUNK + l[0];
+        if let Some(chunk) = slot.get() {
+            return Some(chunk[at]);
+        }
+        if self.kept.load(Ordering::Relaxed) >= KEPT_CHUNKS {
+            return Some(self.cell_distance(o));
+        }
+        let chunk = slot.get_or_init(|| {
+            self.kept.fetch_add(1, Ordering::Relaxed);
+            self.compute_chunk(c.map(|i| i * CHUNK))
+        });
+        Some(chunk[at])
+    }
+
+    /// The rows `(y, z)` with occupied cells for `y` in `y0..y1` at height `z`, as
+    /// `(y, x offsets)`.
+    fn rows_at(&self, z: usize, y0: usize, y1: usize) -> impl Iterator<Item = (usize, &[u32])> {
+        let base = (z * self.dims[1]) as u64;
+        let r = self.rows.partition_point(|&id| id < base + y0 as u64);
+        self.rows[r..]
+            .iter()
+            .take_while(move |&&id| id < base + y1 as u64)
+            .enumerate()
+            .map(move |(i, &id)| {
+                let (a, b) = (self.row_start[r + i], self.row_start[r + i + 1]);
+                ((id - base) as usize, &self.xs[a..b])
+            })
+    }
+
+    /// The distance of the one cell at offsets `o`, computed alone (as [`Self::get`] gives
+    /// it, for distances under 2^12 cells, where the squared distances are exact in f32):
+    /// the nearest occupied cell of each row within a border that grows as in
+    /// [`Self::compute_chunk`].
+    fn cell_distance(&self, o: [usize; 3]) -> f32 {
+        let [_, ny, nz] = self.dims;
+        let mut pad = FIRST_PAD;
+        loop {
+            let (y0, y1) = (o[1].saturating_sub(pad), (o[1] + 1 + pad).min(ny));
+            let (z0, z1) = (o[2].saturating_sub(pad), (o[2] + 1 + pad).min(nz));
+            let mut best = u64::MAX;
+            for z in z0..z1 {
+                for (y, xs) in self.rows_at(z, y0, y1) {
+                    let mut d = [0f32];
+                    nearest_in_list(xs, o[0], &mut d);
+                    let (dy, dz) = (y.abs_diff(o[1]) as u64, z.abs_diff(o[2]) as u64);
+                    best = best.min(d[0] as u64 + dy * dy + dz * dz);
+                }
+            }
+            let whole = y0 == 0 && y1 == ny && z0 == 0 && z1 == nz;
+            if whole || best <= ((pad + 1) * (pad + 1)) as u64 {
+                return if best == u64::MAX {
+                    f32::INFINITY
+                } else {
+                    (best as f32).sqrt() * self.voxel
+                };
+            }
+            pad = if best == u64::MAX {
+                pad * PAD_GROWTH
+            } else {
+                ((best as f64).sqrt().ceil() as usize).max(pad + 1)
+            };
+        }
+    }
+
+    /// The occupied x offsets of row `(y, z)` (offsets in the box).
+    fn row(&self, y: usize, z: usize) -> &[u32] {
+        let id = (z * self.dims[1] + y) as u64;
+        match self.rows.binary_search(&id) {
+            Ok(r) => &self.xs[self.row_start[r]..self.row_start[r + 1]],
+            Err(_) => &[],
+        }
+    }
+
+    /// Whether cell `k` is occupied.
+    fn occupied(&self, k: [i64; 3]) -> bool {
+        self.offsets(k)
+            .is_some_and(|o| self.row(o[1], o[2]).binary_search(&(o[0] as u32)).is_ok())
+    }
+
+    /// Calls `visit` on the occupied cells with keys in the half-open box `lo..hi` until it
+    /// returns true; returns whether it did.
+    fn any_occupied(
+        &self,
+        lo: [i64; 3],
+        hi: [i64; 3],
+        mut visit: impl FnMut([i64; 3]) -> bool,
+    ) -> bool {
+        let lo = [0, 1, 2].map(|a| (lo[a] - self.min[a]).max(0) as usize);
+        let hi = [0, 1, 2].map(|a| (hi[a] - self.min[a]).clamp(0, self.dims[a] as i64) as usize);
+        if (0..3).any(|a| lo[a] >= hi[a]) {
+            return false;
+        }
+        for z in lo[2]..hi[2] {
+            for (y, xs) in self.rows_at(z, lo[1], hi[1]) {
+                let from = xs.partition_point(|&x| (x as usize) < lo[0]);
+                for &x in xs[from..].iter().take_while(|&&x| (x as usize) < hi[0]) {
+                    let key = [
+                        x as i64 + self.min[0],
+                        y as i64 + self.min[1],
+                        z as i64 + self.min[2],
+                    ];
+                    if visit(key) {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    /// The distances of the chunk whose first cell has offsets `start`: the exact
+    /// transform (Felzenszwalb and Huttenlocher, 2012) of the occupied cells in whole rows
+    /// along x and within a border of `pad` cells along y and z. A cell whose distance
+    /// found is at most `pad + 1` cells is exact (any occupied cell outside the border is
+    /// farther); if some cell is not, the border grows and the chunk is computed again.
+    fn compute_chunk(&self, start: [usize; 3]) -> Box<[f32]> {
+        let [_, ny, nz] = self.dims;
+        let end = [0, 1, 2].map(|a| (start[a] + CHUNK).min(self.dims[a]));
+        let cx = end[0] - start[0];
+        let (cy, cz) = (end[1] - start[1], end[2] - start[2]);
+        let mut pad = FIRST_PAD;
+        loop {
+            let (y0, y1) = (start[1].saturating_sub(pad), (end[1] + pad).min(ny));
+            let (z0, z1) = (start[2].saturating_sub(pad), (end[2] + pad).min(nz));
+            let whole = y0 == 0 && y1 == ny && z0 == 0 && z1 == nz;
+            let (py, pz) = (y1 - y0, z1 - z0);
+            let longest = py.max(pz);
+            // Along x, whole rows: the squared distance to the nearest occupied cell of the
+            // row, laid out `(z * py + y) * cx + x`.
+            let mut g = vec![FAR; cx * py * pz];
+            for z in z0..z1 {
+                for (y, xs) in self.rows_at(z, y0, y1) {
+                    let line = &mut g[((z - z0) * py + (y - y0)) * cx..][..cx];
+                    nearest_in_list(xs, start[0], line);
+                }
+            }
+            let (mut f, mut out) = (vec![0f32; longest], vec![0f32; longest]);
+            let (mut vs, mut zs) = (vec![0usize; longest], vec![0f32; longest + 1]);
+            // Along y, kept only for the chunk's rows: `(z * cy + y) * cx + x`.
+            let mut g2 = vec![FAR; cx * cy * pz];
+            for z in 0..pz {
+                for x in 0..cx {
+                    for y in 0..py {
+                        f[y] = g[(z * py + y) * cx + x];
+                    }
+                    if f[..py].iter().all(|&d| d == FAR) {
+                        continue;
+                    }
+                    edt_1d_range(&f[..py], start[1] - y0, &mut out[..cy], &mut vs, &mut zs);
+                    for y in 0..cy {
+                        g2[(z * cy + y) * cx + x] = out[y];
+                    }
+                }
+            }
+            // Along z, kept only for the chunk's cells.
+            let mut dist = vec![f32::INFINITY; CHUNK_CELLS].into_boxed_slice();
+            let reach = ((pad + 1) * (pad + 1)) as f32;
+            // The largest squared distance found that is not certain yet.
+            let mut undecided = 0f32;
+            for y in 0..cy {
+                for x in 0..cx {
+                    for z in 0..pz {
+                        f[z] = g2[(z * cy + y) * cx + x];
+                    }
+                    if f[..pz].iter().all(|&d| d == FAR) {
+                        undecided = FAR;
+                        continue;
+                    }
+                    edt_1d_range(&f[..pz], start[2] - z0, &mut out[..cz], &mut vs, &mut zs);
+                    for z in 0..cz {
+                        let q = out[z];
+                        if !whole && q > reach {
+                            undecided = undecided.max(q);
+                        }
+                        dist[(z * CHUNK + y) * CHUNK + x] = if q >= FAR / 2.0 {
+                            f32::INFINITY
+                        } else {
+                            q.sqrt() * self.voxel
+                        };
+                    }
+                }
+            }
+            if whole || undecided == 0.0 {
+                return dist;
+            }
+            // A border as wide as the farthest distance found holds every nearest
+            // occupied cell (the distances can only shrink as it widens); with none found,
+            // the border grows by a factor.
+            pad = if undecided < FAR / 2.0 {
+                (undecided.sqrt().ceil() as usize).max(pad + 1)
+            } else {
+                pad * PAD_GROWTH
+            };
+        }
+    }
+}
+
+/// Squared distances (in cells) from cells `start .. start + out.len()` of a row to the
+/// nearest of its occupied cells `xs` (ascending), written to `out`; the same values as
+/// the transform of the whole row.
+fn nearest_in_list(xs: &[u32], start: usize, out: &mut [f32]) {
+    let mut i = xs.partition_point(|&x| (x as usize) < start);
+    for (j, d) in out.iter_mut().enumerate() {
+        let x = start + j;
+        while i < xs.len() && (xs[i] as usize) < x {
+            i += 1;
+        }
+        let right = xs.get(i).map(|&r| r as usize - x);
+        let left = i.checked_sub(1).map(|l| x - xs[l] as usize);
+        if let Some(n) = match (left, right) {
+            (Some(l), Some(r)) => Some(l.min(r)),
+            (l, r) => l.or(r),
+        } {
+            *d = (n * n) as f32;
+        }
+    }
+}
+
+/// One-dimensional squared distance transform of sampled function `f` (lower envelope of parabolas).
+fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
+    edt_1d_range(f, 0, d, v, z);
+}
+
+/// [`edt_1d`] written only for the positions `from .. from + d.len()` of `f` (the same
+/// values, bit for bit).
+fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
+    let n = f.len();
+    let mut k = 0usize;
+    v[0] = 0;
+    z[0] = f32::NEG_INFINITY;
+    z[1] = f32::INFINITY;
+    for q in 1..n {
+        loop {
+            let p = v[k];
+            let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32))
+                / (2.0 * q as f32 - 2.0 * p as f32);
+            if s <= z[k] && k > 0 {
+                k -= 1;
+            } else if s <= z[k] {
+                // k == 0 and the new parabola dominates from -inf: replace.
+                v[0] = q;
+                z[0] = f32::NEG_INFINITY;
+                z[1] = f32::INFINITY;
+                break;
+            } else {
+                k += 1;
+                v[k] = q;
+                z[k] = s;
+                z[k + 1] = f32::INFINITY;
+                break;
+            }
+        }
+    }
+    k = 0;
+    for (q, dq) in d.iter_mut().enumerate().take(n - from.min(n)) {
+        let q = q + from;
+        while z[k + 1] < q as f32 {
+            k += 1;
+        }
+        let p = v[k];
+        let diff = q as f32 - p as f32;
+        *dq = diff * diff + f[p];
+    }
+}
+
+mod dense {
+    //! The dense exact transform over the whole box, for boxes small enough to hold at
+    //! once ([`DENSE_CELLS`]): faster than chunks there; the chunked field equals it bit
+    //! for bit.
+    use super::*;
+
+    /// Exact Euclidean distance transform (Felzenszwalb and Huttenlocher, 2012) of the
+    /// occupied voxel `keys`, in metres. Lines along each axis are transformed in parallel;
+    /// the result is stored y-major (`(y * nz + z) * nx + x`), the layout the last pass
+    /// writes.
+    pub(super) fn dense_distances(
+        min: [i64; 3],
+        dims: [usize; 3],
+        keys: &[[i64; 3]],
+        v: f64,
+    ) -> Vec<f32> {
+        use rayon::prelude::*;
+        let [nx, ny, nz] = dims;
+        // Squared distances in cells, z-major (`(z * ny + y) * nx + x`) for the first passes.
+        let mut d = vec![FAR; nx * ny * nz];
+        for k in keys {
+            let (x, y, z) = (
+                (k[0] - min[0]) as usize,
+                (k[1] - min[1]) as usize,
+                (k[2] - min[2]) as usize,
+            );
+            d[(z * ny + y) * nx + x] = 0.0;
+        }
+        let longest = nx.max(ny).max(nz);
+        let scratch = || {
+            (
+                vec![0f32; longest],
+                vec![0f32; longest],
+                vec![0usize; longest],
+                vec![0f32; longest + 1],
+            )
+        };
+        // Along x: rows are contiguous and hold only 0 (occupied) or FAR, so the nearest
+        // occupied cell on either side gives the exact squared distance (the value
+        // `edt_1d` computes, in a fraction of its time).
+        d.par_chunks_mut(nx).for_each(nearest_in_row);
+        // Along y: within each z slab. A slab without occupied cells is FAR after the
+        // first pass and stays FAR (the transform of a constant FAR line is FAR).
+        let mut slab_used = vec![false; nz];
+        for k in keys {
+            slab_used[(k[2] - min[2]) as usize] = true;
+        }
+        d.par_chunks_mut(nx * ny)
+            .zip(slab_used.par_iter())
+            .filter(|(_, used)| **used)
+            .for_each_init(scratch, |(f, out, vs, zs), (slab, _)| {
+                for x in 0..nx {
+                    for y in 0..ny {
+                        f[y] = slab[y * nx + x];
+                    }
+                    edt_1d(&f[..ny], &mut out[..ny], vs, zs);
+                    for y in 0..ny {
+                        slab[y * nx + x] = out[y];
+                    }
+                }
+            });
+        // Along z: read the z-major grid, write one y-major plane per y.
+        let src = &d;
+        let mut dist = vec![0f32; nx * ny * nz];
+        dist.par_chunks_mut(nx * nz).enumerate().for_each_init(
+            scratch,
+            |(f, out, vs, zs), (y, plane)| {
+                for x in 0..nx {
+                    for z in 0..nz {
+                        f[z] = src[(z * ny + y) * nx + x];
+                    }
+                    edt_1d(&f[..nz], &mut out[..nz], vs, zs);
+                    for z in 0..nz {
+                        let q = out[z];
+                        plane[z * nx + x] = if q >= FAR / 2.0 {
+                            f32::INFINITY
+                        } else {
+                            q.sqrt() * v as f32
+                        };
+                    }
+                }
+            },
+        );
+        dist
+    }
+
+    /// Squared distances (in cells) along a row of 0 (occupied) and FAR cells to its nearest
+    /// occupied cell, in place; a row without one stays FAR. Equal, bit for bit, to
+    /// [`edt_1d`] of the row (both are exact: squared distances are small integers in f32).
+    pub(super) fn nearest_in_row(row: &mut [f32]) {
+        let mut last = None;
+        for (x, d) in row.iter_mut().enumerate() {
+            if *d == 0.0 {
+                last = Some(x);
+            } else if let Some(p) = last {
+                *d = ((x - p) * (x - p)) as f32;
+            }
+        }
+        let mut next = None;
+        for (x, d) in row.iter_mut().enumerate().rev() {
+            if *d == 0.0 {
+                next = Some(x);
+            } else if let Some(p) = next {
+                *d = d.min(((p - x) * (p - x)) as f32);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dense::*;
+
+    fn cfg(floor: bool) -> SceneConfig {
+        SceneConfig {
+            voxel_size: 0.02,
+            floor,
+            field_margin: 0.2,
+        }
+    }
+
+    fn slab(z: f64) -> PointCloud {
+        // A 0.6 x 0.6 m horizontal slab of points at height z, 1 cm apart.
+        let mut pts = Vec::new();
+        for i in 0..60 {
+            for j in 0..60 {
+                pts.push(Point3::new(i as f64 * 0.01, j as f64 * 0.01, z));
+            }
+        }
+        PointCloud::new(pts)
+    }
+
+    fn vertical(x: f64, y: f64, bottom: f64, top: f64, r: f64) -> Cylinder {
+        Cylinder {
+            joint: 0,
+            a: Point3::new(x, y, bottom),
+            b: Point3::new(x, y, top),
+            radius: r,
+        }
+    }
+
+    /// Occupied keys of a seeded scene in a box: a slab, a wall, a post, and `strays` lone
+    /// cells scattered far apart (so chunks far from everything grow their border).
+    fn random_keys(seed: u64, dims: [usize; 3], strays: usize) -> Vec<[i64; 3]> {
+        let mut state = seed;
+        let mut next = |n: usize| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) as usize) % n.max(1)
+        };
+        let mut keys = Vec::new();
+        let h = next(dims[2]);
+        for x in 3..dims[0] / 2 {
+            for y in 5..dims[1] / 3 {
+                keys.push([x as i64, y as i64, h as i64]);
+            }
+        }
+        let wx = next(dims[0]);
+        for y in 0..dims[1] {
+            for z in 0..dims[2] / 2 {
+                keys.push([wx as i64, y as i64, z as i64]);
+            }
+        }
+        let (px, py) = (next(dims[0]), next(dims[1]));
+        for z in 0..dims[2] {
+            keys.push([px as i64, py as i64, z as i64]);
+        }
+        for _ in 0..strays {
+            keys.push([next(dims[0]), next(dims[1]), next(dims[2])].map(|c| c as i64));
+        }
+        keys.sort_unstable();
+        keys.dedup();
+        keys
+    }
+
+    #[test]
+    fn chunked_field_equals_the_dense_transform_bit_for_bit() {
+        // Boxes smaller and larger than a chunk, not multiples of it, offset from the
+        // origin; sparse scenes (only strays) make chunks grow their border to the box.
+        for (seed, dims, strays) in [
+            (1u64, [7usize, 5, 3], 0usize),
+            (2, [70, 41, 33], 5),
+            (3, [150, 97, 40], 0),
+            (4, [200, 180, 30], 3),
+        ] {
+            let mut keys = random_keys(seed, dims, strays);
+            if seed == 4 {
+                // Only the strays: most cells are far from everything.
+                keys.truncate(0);
+                keys.extend([[3, 170, 2], [190, 4, 27], [100, 90, 15]]);
+            }
+            let min = [-13, 7, -2];
+            let keys: Vec<[i64; 3]> = keys
+                .iter()
+                .map(|k| [k[0] + min[0], k[1] + min[1], k[2] + min[2]])
+                .collect();
+            let want = dense_distances(min, dims, &keys, 0.02);
+            let field = DistanceField::with_dense_limit(min, dims, &keys, 0.02, 0);
+            assert!(field.dense.is_none());
+            let whole = DistanceField::new(min, dims, &keys, 0.02);
+            assert_eq!(whole.dense.as_deref(), Some(&want[..]));
+            let [nx, ny, nz] = dims;
+            for y in 0..ny {
+                for z in 0..nz {
+                    for x in 0..nx {
+                        let k = [x as i64 + min[0], y as i64 + min[1], z as i64 + min[2]];
+                        let got = field.get(k).unwrap();
+                        let w = want[(y * nz + z) * nx + x];
+                        assert_eq!(got.to_bits(), w.to_bits(), "seed {seed} at {k:?}");
+                        assert_eq!(field.occupied(k), w == 0.0, "seed {seed} at {k:?}");
+                        if (x + 3 * y + 7 * z) % 11 == 0 {
+                            let alone = field.cell_distance([x, y, z]);
+                            assert_eq!(alone.to_bits(), w.to_bits(), "seed {seed} at {k:?}");
+                        }
+                    }
+                }
+            }
+            assert_eq!(field.get([min[0] - 1, min[1], min[2]]), None);
+            // The occupied cells of sub-boxes are the keys inside them.
+            for (lo, hi) in [
+                ([-20, 0, -5], [100, 300, 100]),
+                ([0, 10, 0], [5, 30, 3]),
+                ([-13, 7, -2], [-12, 8, -1]),
+            ] {
+                let mut seen = Vec::new();
+                field.any_occupied(lo, hi, |k| {
+                    seen.push(k);
+                    false
+                });
+                seen.sort_unstable();
+                let inside: Vec<[i64; 3]> = keys
+                    .iter()
+                    .filter(|k| (0..3).all(|a| k[a] >= lo[a] && k[a] < hi[a]))
+                    .copied()
+                    .collect();
+                assert_eq!(seen, inside, "seed {seed}");
+            }
+        }
+    }
+
+    #[test]
+    fn one_dimensional_transform_matches_brute_force() {
+        let f: Vec<f32> = vec![1e20, 0.0, 1e20, 1e20, 1e20, 4.0, 1e20, 0.0, 1e20];
+        let mut d = vec![0.0; f.len()];
+        let (mut v, mut z) = (vec![0; f.len()], vec![0.0; f.len() + 1]);
+        edt_1d(&f, &mut d, &mut v, &mut z);
+        for (q, dq) in d.iter().enumerate() {
+            let brute = f
+                .iter()
+                .enumerate()
+                .map(|(p, fp)| (q as f32 - p as f32).powi(2) + fp)
+                .fold(f32::INFINITY, f32::min);
+            assert_eq!(*dq, brute, "at {q}");
+        }
+    }
+
+    #[test]
+    fn row_shortcut_equals_the_transform_bit_for_bit() {
+        const FAR: f32 = 1e20;
+        let mut state = 99u64;
+        for n in [1usize, 2, 7, 64, 301] {
+            for density in [0.0, 0.01, 0.1, 0.5] {
+                let mut row: Vec<f32> = (0..n)
+                    .map(|_| {
+                        state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
+                        if ((state >> 33) as f64 / (1u64 << 31) as f64) < density {
+                            0.0
+                        } else {
+                            FAR
+                        }
+                    })
+                    .collect();
+                let mut want = vec![0.0; n];
+                let (mut v, mut z) = (vec![0; n], vec![0.0; n + 1]);
+                edt_1d(&row, &mut want, &mut v, &mut z);
+                nearest_in_row(&mut row);
+                let (got, want): (Vec<u32>, Vec<u32>) = (
+                    row.iter().map(|d| d.to_bits()).collect(),
+                    want.iter().map(|d| d.to_bits()).collect(),
+                );
+                assert_eq!(got, want, "n {n}, density {density}");
+            }
+        }
+        // A constant FAR line stays FAR (empty slabs are skipped on that ground).
+        let f = vec![FAR; 50];
+        let mut d = vec![0.0; 50];
+        edt_1d(&f, &mut d, &mut vec![0; 50], &mut vec![0.0; 51]);
+        assert!(d.iter().all(|&x| x == FAR));
+    }
+
+    #[test]
+    fn clearance_is_a_lower_bound_and_tight_far_away() {
+        let s = Scene::new(&slab(0.45), &cfg(false));
+        // A ball-like short cylinder 0.2 m above the slab: the true gap is about 0.2 - r.
+        let c = vertical(0.3, 0.3, 0.65, 0.66, 0.05);
+        let gap = s.clearance(&c);
+        assert!(gap <= 0.15 + 1e-9, "lower bound: {gap}");
+        assert!(gap > 0.15 - 0.06, "not too loose: {gap}");
+        assert!(!s.intersects(&c));
+    }
+
+    #[test]
+    fn exact_test_finds_contact_with_the_slab_and_the_floor() {
+        let s = Scene::new(&slab(0.45), &cfg(true));
+        // The slab's voxels span z in [0.44, 0.46]: a cylinder reaching down to 0.455 touches.
+        assert!(s.intersects(&vertical(0.3, 0.3, 0.455, 0.7, 0.05)));
+        assert!(!s.intersects(&vertical(0.3, 0.3, 0.47, 0.7, 0.05)));
+        // Off the slab, only the floor: a leg ending 1 cm above it is free, 1 cm below is not.
+        assert!(!s.intersects(&vertical(1.5, 1.5, 0.01, 0.4, 0.03)));
+        assert!(s.intersects(&vertical(1.5, 1.5, -0.01, 0.4, 0.03)));
+        let lying = Cylinder {
+            joint: 0,
+            a: Point3::new(2.0, 2.0, 0.04),
+            b: Point3::new(2.5, 2.0, 0.04),
+            radius: 0.05,
+        };
+        assert!(s.intersects(&lying));
+        assert!((s.clearance(&lying) + 0.01).abs() < 1e-9);
+    }
+
+    #[test]
+    fn field_guided_test_agrees_with_parry_alone() {
+        // A slab, a post and a wall; cylinders of every orientation (and along the grid
+        // axes), length and radius around them, many grazing: both tests must give the same
+        // answer for each.
+        let mut pts = slab(0.45).points;
+        for k in 0..80 {
+            pts.push(Point3::new(0.9, 0.2, k as f64 * 0.01));
+            for j in 0..60 {
+                pts.push(Point3::new(-0.3, j as f64 * 0.01, k as f64 * 0.01));
+            }
+        }
+        let s = Scene::new(&PointCloud::new(pts), &cfg(false));
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut hits, mut misses) = (0, 0);
+        for i in 0..4000 {
+            let a = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, next() * 0.9);
+            let mut d = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * next();
+            if i % 4 == 0 {
+                // Every fourth along a grid axis (legs hang straight down).
+                let k = i / 4 % 3;
+                d = Vector3::ith(k, d[k]);
+            }
+            let c = Cylinder {
+                joint: 0,
+                a,
+                b: a + d,
+                radius: 0.01 + next() * 0.08,
+            };
+            let want = s.intersects_parry(&c);
+            assert_eq!(s.intersects(&c), want, "{c:?}");
+            if want {
+                hits += 1;
+            } else {
+                misses += 1;
+            }
+        }
+        assert!(hits > 500 && misses > 500, "{hits} hits, {misses} misses");
+    }
+
+    #[test]
+    fn empty_scene_is_free_but_for_the_floor() {
+        let s = Scene::new(&PointCloud::default(), &cfg(true));
+        assert!(!s.intersects(&vertical(0.0, 0.0, 0.1, 0.5, 0.05)));
+        assert!((s.clearance(&vertical(0.0, 0.0, 0.1, 0.5, 0.05)) - 0.1).abs() < 1e-9);
+        assert!((s.surface_distance(&Point3::new(0.0, 0.0, 0.3), 0.1) - 0.2).abs() < 1e-9);
+    }
+}

@@ -1,0 +1,731 @@
+//! Unfolding the agent model (section 4.3) and combining the evidence (section 4.4).
+//!
+//! The hierarchy is walked from its root. At each node F the joints J_F are set to
+//! theta1 and turned towards theta2 while the links E_F are checked for contact; the joint
+//! stops at the contact angle theta_c, or takes theta_d when nothing was touched (Eq. 2).
+//! A node's children are visited when their edge constraint equals the node's outcome.
+//!
+//! J_F is split into kinematic branches, sets of sweeps that move the same links (the left
+//! and right leg are two branches); each branch stops at its own contact, and each branch
+//! is one "edge" of Eq. 3-4: its local score is exp(-(theta_d - theta_c)^2 / 2 sigma^2)
+//! (the squared differences averaged over its joints) on contact, epsilon otherwise.
+
+use crate::method::fit::{ContactConfig, Fit};
+use crate::method::scene::Scene;
+use crate::model::agent::{Agent, Cylinder, Placement, Posture};
+use crate::model::hierarchy::{Hierarchy, Node, Spread};
+
+/// The outcome of one node.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NodeOutcome {
+    /// Whether the node was processed (its edge constraint matched).
+    pub visited: bool,
+    /// Whether a contact occurred: the fine-grained affordance is present.
+    pub found: bool,
+    /// Local score (Eq. 3 combined by the T-norm of Eq. 4); 0 when not visited.
+    pub local: f64,
+}
+
+/// The agent after unfolding: the goal configuration H_g and what it found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Unfolded {
+    /// Where the agent is.
+    pub placement: Placement,
+    /// The goal posture H_g.
+    pub posture: Posture,
+    /// One outcome per hierarchy node, in node order.
+    pub nodes: Vec<NodeOutcome>,
+    /// Accumulated score (T-conorm of Eq. 5 over the found nodes' local scores).
+    pub score: f64,
+    /// Stability of the fit (Eq. 1).
+    pub stability: f64,
+}
+
+impl Unfolded {
+    /// Number of fine-grained affordances found.
+    pub fn found(&self) -> usize {
+        self.nodes.iter().filter(|n| n.found).count()
+    }
+
+    /// Whether `self` ranks above `other` under `select` (ties are not stronger).
+    pub fn stronger_than(
+        &self,
+        other: &Unfolded,
+        select: crate::model::hierarchy::Selection,
+    ) -> bool {
+        self.rank(other, select) == std::cmp::Ordering::Greater
+    }
+
+    /// Orders two poses under `select`.
+    pub fn rank(
+        &self,
+        other: &Unfolded,
+        select: crate::model::hierarchy::Selection,
+    ) -> std::cmp::Ordering {
+        use crate::model::hierarchy::Selection;
+        match select {
+            Selection::Score => self.score.total_cmp(&other.score),
+            Selection::MostSpecific => self
+                .found()
+                .cmp(&other.found())
+                .then(self.score.total_cmp(&other.score)),
+        }
+    }
+}
+
+/// The T-norm of Eq. 4.
+pub fn t_norm(r: f64, q: f64) -> f64 {
+    r * q
+}
+
+/// The T-conorm of Eq. 5.
+pub fn t_conorm(r: f64, q: f64) -> f64 {
+    r + q - r * q
+}
+
+/// The local score of Eq. 3 for one edge: `Some(squared angle error)` on contact.
+pub fn local_score(sq_error: Option<f64>, sigma_theta: f64, epsilon: f64) -> f64 {
+    match sq_error {
+        Some(e2) => (-e2 / (2.0 * sigma_theta * sigma_theta)).exp(),
+        None => epsilon,
+    }
+}
+
+/// Unfolds the hierarchy from a fit (sections 4.3 and 4.4).
+pub fn unfold(
+    agent: &Agent,
+    h: &Hierarchy,
+    scene: &Scene,
+    fit: &Fit,
+    contact: &ContactConfig,
+) -> Unfolded {
+    let mut posture = fit.posture.clone();
+    let mut nodes: Vec<NodeOutcome> = Vec::with_capacity(h.nodes.len());
+    let mut score = 0.0;
+    for node in &h.nodes {
+        let visited = match node.parent {
+            None => true,
+            Some(p) => nodes[p].visited && nodes[p].found == node.when,
+        };
+        if !visited {
+            nodes.push(NodeOutcome {
+                visited: false,
+                found: false,
+                local: 0.0,
+            });
+            continue;
+        }
+        let (found, local) = NodeContext {
+            agent,
+            h,
+            scene,
+            place: &fit.placement,
+            node,
+            contact,
+        }
+        .unfold(&mut posture);
+        if found {
+            score = t_conorm(score, local);
+        }
+        nodes.push(NodeOutcome {
+            visited: true,
+            found,
+            local,
+        });
+    }
+    Unfolded {
+        placement: fit.placement,
+        posture,
+        nodes,
+        score,
+        stability: fit.stability,
+    }
+}
+
+/// What the rules of one node's unfolding read: the body, its hierarchy (for the scores),
+/// the scene, where the body stands, the node, and how finely contact is located. Each
+/// rule of the node ([`clamp`](Self::clamp), [`spread`](Self::spread),
+/// [`free_start`](Self::free_start), [`release`](Self::release),
+/// [`support`](Self::support)) is one method.
+pub struct NodeContext<'a> {
+    /// The body.
+    pub agent: &'a Agent,
+    /// The hierarchy the node belongs to.
+    pub h: &'a Hierarchy,
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Where the body stands.
+    pub place: &'a Placement,
+    /// The node F unfolded.
+    pub node: &'a Node,
+    /// How finely contact is located.
+    pub contact: &'a ContactConfig,
+}
+
+impl NodeContext<'_> {
+    /// `clamp`: holds each clamped joint of the node within its range (radians).
+    pub fn clamp(&self, posture: &mut Posture) {
+        for c in &self.node.clamps {
+            posture.angles[c.joint] = posture.angles[c.joint].clamp(c.lower, c.upper);
+        }
+    }
+
+    /// Undoes [`clamp`](Self::clamp): the clamped joints take their angles in `before`.
+    pub fn unclamp(&self, posture: &mut Posture, before: &Posture) {
+        for c in &self.node.clamps {
+            posture.angles[c.joint] = before.angles[c.joint];
+        }
+    }
+
+    /// Sets every swept joint of the node to theta1, turning about its sweep's axis.
+    pub fn start(&self, posture: &mut Posture) {
+        for s in &self.node.sweeps {
+            posture.angles[s.joint] = s.theta1;
+            posture.axes[s.joint] = s.axis;
+        }
+    }
+
+    /// `spread`: sets each joint of `spreads` to its `k`-th angle (its last when it has
+    /// fewer than `k + 1`).
+    pub fn spread(spreads: &[&Spread], k: usize, posture: &mut Posture) {
+        for sp in spreads {
+            posture.angles[sp.joint] = sp.angles[k.min(sp.angles.len() - 1)];
+        }
+    }
+
+    /// Sets the sweeps of `branch` to sweep parameter `t` (0 at theta1, 1 at theta2).
+    pub fn at(&self, branch: &[usize], t: f64, posture: &mut Posture) {
+        for &s in branch {
+            let sw = &self.node.sweeps[s];
+            posture.angles[sw.joint] = sw.theta1 + t * (sw.theta2 - sw.theta1);
+        }
+    }
+
+    /// `free_start`: whether a contact at sweep parameter `hit` is refused because the
+    /// links were already touching at theta1 (they had no room to unfold).
+    pub fn free_start(&self, hit: Option<f64>) -> bool {
+        self.node.free_start && hit == Some(0.0)
+    }
+
+    /// `release`: whether the parts of `parts` that touch the scene are held from the side
+    /// opposite the node's release direction (agent frame, turned by the heading), within
+    /// the hierarchy's support angle. True when the node has no release direction.
+    pub fn release(&self, parts: &[Cylinder]) -> bool {
+        let Some(release) = self.node.release else {
+            return true;
+        };
+        let dir =
+            (nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::z_axis(), self.place.yaw)
+                * release)
+                .normalize();
+        parts
+            .iter()
+            .filter(|c| self.scene.clearance(c) <= 0.0 && self.scene.intersects(c))
+            .all(|c| {
+                self.scene
+                    .contact_normal(c)
+                    .is_some_and(|n| n.dot(&dir) >= self.h.score.support_cos)
+            })
+    }
+
+    /// `support`: whether the branch's support parts (if the node has any that the branch
+    /// moves) rest on the scene at sweep parameter `t`: some part has the scene within
+    /// `support_gap` below it.
+    pub fn support(&self, posture: &Posture, branch: &[usize], t: f64) -> bool {
+        let (agent, node, scene) = (self.agent, self.node, self.scene);
+        let mine: Vec<(usize, [f64; 2])> = node
+            .support
+            .iter()
+            .copied()
+            .filter(|(l, _)| {
+                branch
+                    .iter()
+                    .any(|&s| agent.is_descendant(*l, node.sweeps[s].joint))
+            })
+            .collect();
+        if mine.is_empty() {
+            return true;
+        }
+        let mut p = posture.clone();
+        self.at(branch, t, &mut p);
+        let mut frames = Vec::new();
+        agent.forward_kinematics(self.place, &p, &mut frames);
+        let step = scene.voxel_size();
+        agent
+            .cylinders(&frames, |j| mine.iter().any(|(l, _)| *l == j))
+            .iter()
+            .any(|c| {
+                let [s0, s1] = mine
+                    .iter()
+                    .find(|(l, _)| *l == c.joint)
+                    .map_or([0.0, 1.0], |m| m.1);
+                let d = c.b - c.a;
+                let n = ((d.norm() * (s1 - s0)) / step).ceil().max(1.0) as usize;
+                (0..=n).any(|i| {
+                    let q = c.a + d * (s0 + (s1 - s0) * i as f64 / n as f64);
+                    scene.drop_below(&q, c.radius + node.support_gap) - c.radius <= node.support_gap
+                })
+            })
+    }
+
+    /// Sweeps one kinematic branch of the node from theta1 towards theta2, stopping at the
+    /// first contact of its links that the rules accept; writes Eq. 2's angles into
+    /// `posture` and returns the contact parameter and the branch's local score (Eq. 3).
+    pub fn sweep_branch(
+        &self,
+        posture: &mut Posture,
+        branch: &[usize],
+        links: &[usize],
+    ) -> (Option<f64>, f64) {
+        let (agent, node) = (self.agent, self.node);
+        let speed: f64 = branch
+            .iter()
+            .map(|&s| {
+                let sw = &node.sweeps[s];
+                (sw.theta2 - sw.theta1).abs() * agent.reach(sw.joint)
+            })
+            .sum();
+        // Only the branch's joints move; they are rewritten at every step.
+        let mut p = posture.clone();
+        let mut frames = Vec::new();
+        let mut motion = |t: f64, out: &mut Vec<Cylinder>| {
+            self.at(branch, t, &mut p);
+            agent.forward_kinematics(self.place, &p, &mut frames);
+            *out = agent.cylinders(&frames, |j| links.contains(&j));
+            for c in out.iter_mut() {
+                if let Some(k) = node.links.iter().position(|&l| l == c.joint) {
+                    let [s0, s1] = node.spans[k];
+                    let (a, d) = (c.a, c.b - c.a);
+                    c.a = a + d * s0;
+                    c.b = a + d * s1;
+                }
+            }
+        };
+        let mut hit =
+            self.scene
+                .first_contact(&mut motion, speed.max(1e-9), self.contact.resolution);
+        let mut blocked = None;
+        if self.free_start(hit) {
+            blocked = hit.take();
+        }
+        if let (Some(t), Some(_)) = (hit, node.release) {
+            let mut parts = Vec::new();
+            motion(t, &mut parts);
+            if !self.release(&parts) {
+                blocked = hit.take();
+            }
+        }
+        if let Some(t) = hit {
+            if !self.support(&p, branch, t) {
+                blocked = hit.take();
+            }
+        }
+        let mut sq = 0.0;
+        for &s in branch {
+            let sw = &node.sweeps[s];
+            // Eq. 2: theta_c on contact, theta_d otherwise.
+            let theta = match hit.or(blocked) {
+                Some(t) => sw.theta1 + t * (sw.theta2 - sw.theta1),
+                None => sw.thetad,
+            };
+            posture.angles[sw.joint] = theta;
+            sq += (sw.thetad - theta).powi(2);
+        }
+        let sq = sq / branch.len() as f64;
+        (
+            hit,
+            local_score(
+                hit.map(|_| sq),
+                self.h.score.sigma_theta,
+                self.h.score.epsilon,
+            ),
+        )
+    }
+
+    /// Sweeps the node's joints, writing the resulting angles (Eq. 2) into `posture`;
+    /// returns whether it touched and its local score.
+    pub fn unfold(&self, posture: &mut Posture) -> (bool, f64) {
+        let (agent, node) = (self.agent, self.node);
+        let before = posture.clone();
+        self.clamp(posture);
+        self.start(posture);
+        let branches = branches(agent, node);
+        // The links of E_F each branch moves.
+        let branch_links: Vec<Vec<usize>> = branches
+            .iter()
+            .map(|branch| {
+                node.links
+                    .iter()
+                    .copied()
+                    .filter(|&l| {
+                        branch
+                            .iter()
+                            .any(|&s| agent.is_descendant(l, node.sweeps[s].joint))
+                    })
+                    .collect()
+            })
+            .collect();
+        // A spread joint that moves the links of several branches (the trunk leaning
+        // sideways moves both arms) is one setting for the whole node: each of its angles
+        // is tried with all branches, and the best outcome (found first, then local score)
+        // is kept.
+        let moves =
+            |sp: &Spread, links: &[usize]| links.iter().any(|&l| agent.is_descendant(l, sp.joint));
+        let shared: Vec<&Spread> = node
+            .spreads
+            .iter()
+            .filter(|sp| branch_links.iter().filter(|ls| moves(sp, ls)).count() > 1)
+            .collect();
+        let shared_settings = shared.iter().map(|sp| sp.angles.len()).max().unwrap_or(1);
+        let mut outcome: Option<(bool, f64, Posture)> = None;
+        for ks in 0..shared_settings {
+            let mut node_posture = posture.clone();
+            Self::spread(&shared, ks, &mut node_posture);
+            let mut local = 1.0;
+            let mut found = false;
+            let mut all_found = true;
+            for (branch, links) in branches.iter().zip(&branch_links) {
+                // The spread joints that move only this branch's links; each of their
+                // angles is tried.
+                let spreads: Vec<&Spread> = node
+                    .spreads
+                    .iter()
+                    .filter(|sp| moves(sp, links) && !shared.iter().any(|s| s.joint == sp.joint))
+                    .collect();
+                let settings = spreads.iter().map(|sp| sp.angles.len()).max().unwrap_or(1);
+                let mut best: Option<(Option<f64>, f64, Posture)> = None;
+                for k in 0..settings {
+                    let mut trial = node_posture.clone();
+                    Self::spread(&spreads, k, &mut trial);
+                    let (hit, r) = self.sweep_branch(&mut trial, branch, links);
+                    let better = match &best {
+                        None => true,
+                        Some((bh, br, _)) => {
+                            (hit.is_some() && bh.is_none())
+                                || (hit.is_some() == bh.is_some() && r > *br)
+                        }
+                    };
+                    if better {
+                        best = Some((hit, r, trial));
+                    }
+                }
+                if let Some((hit, r, trial)) = best {
+                    for &s in branch {
+                        let j = node.sweeps[s].joint;
+                        node_posture.angles[j] = trial.angles[j];
+                    }
+                    for sp in &spreads {
+                        node_posture.angles[sp.joint] = trial.angles[sp.joint];
+                    }
+                    found |= hit.is_some();
+                    all_found &= hit.is_some();
+                    local = t_norm(local, r);
+                }
+            }
+            if node.contact == crate::model::hierarchy::ContactRule::All {
+                found &= all_found;
+            }
+            let better = match &outcome {
+                None => true,
+                Some((bf, bl, _)) => (found && !*bf) || (found == *bf && local > *bl),
+            };
+            if better {
+                outcome = Some((found, local, node_posture));
+            }
+        }
+        let (found, local, node_posture) = outcome.expect("at least one setting");
+        *posture = node_posture;
+        // A contact far from every preferred angle is no use of the affordance.
+        let found = found && local >= self.h.score.min_local;
+        if !found {
+            self.unclamp(posture, &before);
+        }
+        (found, local)
+    }
+}
+
+/// Groups a node's sweeps (by index) into kinematic branches: sweeps that move a common
+/// link of E_F, transitively, belong to one branch. Ordered by first sweep.
+pub fn branches(agent: &Agent, node: &Node) -> Vec<Vec<usize>> {
+    let n = node.sweeps.len();
+    let moves: Vec<Vec<usize>> = node
+        .sweeps
+        .iter()
+        .map(|s| {
+            node.links
+                .iter()
+                .copied()
+                .filter(|&l| agent.is_descendant(l, s.joint))
+                .collect()
+        })
+        .collect();
+    let mut group: Vec<usize> = (0..n).collect();
+    for i in 0..n {
+        for j in 0..i {
+            if moves[i].iter().any(|l| moves[j].contains(l)) {
+                let (gi, gj) = (group[i], group[j]);
+                for g in group.iter_mut() {
+                    if *g == gi {
+                        *g = gj;
+                    }
+                }
+            }
+        }
+    }
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    let mut keys: Vec<usize> = Vec::new();
+    for (i, g) in group.iter().enumerate() {
+        match keys.iter().position(|k| k == g) {
+            Some(p) => out[p].push(i),
+            None => {
+                keys.push(*g);
+                out.push(vec![i]);
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloud::PointCloud;
+    use crate::detect::DetectConfig;
+    use crate::model::agent::Agent;
+    use crate::model::hierarchy::Clamp;
+    use nalgebra::{Point3, Vector3};
+    use std::path::Path;
+
+    /// A body of 1 m: a pelvis and one leg of 0.5 m on a hip turning about +y (a negative
+    /// angle swings the leg forwards, +x), radius 2 cm.
+    const STICK: &str = r#"
+name = "stick"
+[[joint]]
+name = "pelvis"
+origin = [0.0, 0.0, 0.0]
+axis = [0.0, 0.0, 1.0]
+limit = { lower = 0.0, upper = 0.0 }
+link = { name = "pelvis", from = [0.0, -0.05, 0.0], to = [0.0, 0.05, 0.0], radius = 0.02 }
+[[joint]]
+name = "hip"
+parent = "pelvis"
+origin = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+limit = { lower = -180.0, upper = 180.0 }
+link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0.02 }
+"#;
+
+    /// The stick, and the lying hierarchy's numbers with one node that lowers the leg from
+    /// 60 deg above level (hip -150) to 60 deg below (hip -30), held from below.
+    fn models() -> (Agent, Hierarchy) {
+        let agent = Agent::from_toml(STICK, Path::new("stick.toml"), 1.0).unwrap();
+        let lying = crate::model::set::BUILTIN_LYING;
+        let head = &lying[..lying.find("[initial_pose]").unwrap()];
+        // Without lying's legend (its ids are not this file's nodes).
+        let (a, b) = (head.find("legend = [").unwrap(), head.find("]\n\n[").unwrap());
+        let head = format!("{}{}", &head[..a], &head[b + 2..]);
+        let text = format!(
+            "{head}\n[initial_pose]\n\n[[node]]\nid = \"leg\"\nlinks = [\"leg\"]\n\
+             sweep = [{{ joint = \"hip\", theta1 = -150.0, theta2 = -30.0, thetad = -90.0 }}]\n\
+             release = [0.0, 0.0, 1.0]\n"
+        );
+        let h = Hierarchy::from_toml(&text, Path::new("leg.toml"), &agent).unwrap();
+        (agent, h)
+    }
+
+    /// A box 0.5 m long (x 0.1 to 0.6), 0.6 m wide, its top at z = 0.45 and its front face
+    /// at x = 0.6, as points 1 cm apart.
+    fn box_scene() -> Scene {
+        let mut pts = Vec::new();
+        for i in 0..=50 {
+            for j in 0..=60 {
+                pts.push(Point3::new(
+                    0.1 + i as f64 * 0.01,
+                    -0.3 + j as f64 * 0.01,
+                    0.45,
+                ));
+            }
+        }
+        for k in 0..=45 {
+            for j in 0..=60 {
+                pts.push(Point3::new(0.6, -0.3 + j as f64 * 0.01, k as f64 * 0.01));
+            }
+        }
+        Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene)
+    }
+
+    const CONTACT: ContactConfig = ContactConfig { resolution: 0.005 };
+
+    /// The pelvis at `z` above x = 0.15 (over the box), facing +x.
+    fn place(z: f64) -> Placement {
+        Placement {
+            position: Point3::new(0.15, 0.0, z),
+            yaw: 0.0,
+        }
+    }
+
+    fn with<'a>(
+        agent: &'a Agent,
+        h: &'a Hierarchy,
+        scene: &'a Scene,
+        place: &'a Placement,
+        node: &'a Node,
+    ) -> NodeContext<'a> {
+        NodeContext {
+            agent,
+            h,
+            scene,
+            place,
+            node,
+            contact: &CONTACT,
+        }
+    }
+
+    #[test]
+    fn clamp_holds_a_joint_in_its_range_and_unclamp_restores_it() {
+        let (a, h) = models();
+        let s = box_scene();
+        let p = place(1.0);
+        let mut node = h.nodes[0].clone();
+        node.clamps = vec![Clamp {
+            joint: 1,
+            lower: -0.5,
+            upper: 0.5,
+        }];
+        let c = with(&a, &h, &s, &p, &node);
+        let mut posture = a.rest_posture();
+        posture.angles[1] = 1.2;
+        let before = posture.clone();
+        c.clamp(&mut posture);
+        assert_eq!(posture.angles[1], 0.5);
+        c.unclamp(&mut posture, &before);
+        assert_eq!(posture.angles[1], 1.2);
+    }
+
+    #[test]
+    fn spread_takes_the_kth_angle_or_the_last() {
+        let (a, _) = models();
+        let sp = Spread {
+            joint: 1,
+            angles: vec![0.1, 0.2],
+        };
+        let mut posture = a.rest_posture();
+        NodeContext::spread(&[&sp], 0, &mut posture);
+        assert_eq!(posture.angles[1], 0.1);
+        NodeContext::spread(&[&sp], 5, &mut posture);
+        assert_eq!(posture.angles[1], 0.2);
+    }
+
+    #[test]
+    fn free_start_refuses_only_a_contact_at_theta1() {
+        let (a, h) = models();
+        let s = box_scene();
+        let p = place(1.0);
+        let mut node = h.nodes[0].clone();
+        assert!(!with(&a, &h, &s, &p, &node).free_start(Some(0.0)));
+        node.free_start = true;
+        let c = with(&a, &h, &s, &p, &node);
+        assert!(c.free_start(Some(0.0)));
+        assert!(!c.free_start(Some(0.3)));
+        assert!(!c.free_start(None));
+    }
+
+    #[test]
+    fn release_accepts_a_top_and_refuses_a_side() {
+        let (a, h) = models();
+        let s = box_scene();
+        let p = place(1.0);
+        let node = h.nodes[0].clone();
+        let c = with(&a, &h, &s, &p, &node);
+        let r = 0.02;
+        // Lying on the top (the top's voxels reach about 0.46 m), 1 cm into it.
+        let on_top = Cylinder {
+            joint: 1,
+            a: Point3::new(0.2, 0.0, 0.46 + r - 0.01),
+            b: Point3::new(0.5, 0.0, 0.46 + r - 0.01),
+            radius: r,
+        };
+        // Standing against the front face, 1 cm into it.
+        let at_side = Cylinder {
+            joint: 1,
+            a: Point3::new(0.61 + r - 0.01, 0.0, 0.1),
+            b: Point3::new(0.61 + r - 0.01, 0.0, 0.35),
+            radius: r,
+        };
+        assert!(s.intersects(&on_top) && s.intersects(&at_side));
+        assert!(c.release(&[on_top]));
+        assert!(!c.release(&[at_side]));
+        // Held from above instead: the top no longer holds.
+        let mut down = node.clone();
+        down.release = Some(Vector3::new(0.0, 0.0, -1.0));
+        assert!(!with(&a, &h, &s, &p, &down).release(&[on_top]));
+        // No release direction: any contact holds.
+        let mut none = node.clone();
+        none.release = None;
+        assert!(with(&a, &h, &s, &p, &none).release(&[at_side]));
+    }
+
+    #[test]
+    fn support_needs_the_scene_within_the_gap_below() {
+        let (a, h) = models();
+        let s = box_scene();
+        let mut node = h.nodes[0].clone();
+        node.support = vec![(1, [0.0, 1.0])];
+        node.support_gap = 0.05;
+        let mut posture = a.rest_posture();
+        // Halfway through the sweep the leg is level (hip -90), pointing forwards over the box.
+        for (gap, held) in [(0.03, true), (0.2, false)] {
+            let p = place(0.46 + 0.02 + gap);
+            let c = with(&a, &h, &s, &p, &node);
+            c.start(&mut posture);
+            assert_eq!(
+                c.support(&posture, &[0], 0.5),
+                held,
+                "{gap} m above the top"
+            );
+        }
+    }
+
+    #[test]
+    fn a_branch_comes_down_onto_the_top_and_is_held_from_below_only() {
+        let (a, h) = models();
+        let s = box_scene();
+        // The pelvis 10 cm above the top: the leg, lowered from above, touches the top
+        // below level.
+        let p = place(0.46 + 0.02 + 0.1);
+        let node = h.nodes[0].clone();
+        let c = with(&a, &h, &s, &p, &node);
+        let mut posture = a.rest_posture();
+        c.start(&mut posture);
+        let (hit, local) = c.sweep_branch(&mut posture, &[0], &[1]);
+        let hip = posture.angles[1].to_degrees();
+        assert!(hit.is_some(), "the leg touches the top");
+        assert!(
+            (-90.0..-60.0).contains(&hip),
+            "touches below level: hip {hip}"
+        );
+        assert!(local > h.score.epsilon, "{local}");
+        // Held from above instead: the contact does not count, Eq. 2 keeps its angle.
+        let mut down = node.clone();
+        down.release = Some(Vector3::new(0.0, 0.0, -1.0));
+        let c = with(&a, &h, &s, &p, &down);
+        let mut posture = a.rest_posture();
+        c.start(&mut posture);
+        let (hit, local) = c.sweep_branch(&mut posture, &[0], &[1]);
+        assert_eq!(hit, None);
+        assert_eq!(local, h.score.epsilon);
+        assert!((posture.angles[1].to_degrees() - hip).abs() < 1e-9);
+    }
+
+    #[test]
+    fn norms_and_local_score() {
+        assert_eq!(t_norm(0.5, 0.4), 0.2);
+        assert!((t_conorm(0.5, 0.4) - 0.7).abs() < 1e-12);
+        assert_eq!(t_conorm(0.0, 0.3), 0.3);
+        let s = 20f64.to_radians();
+        assert_eq!(local_score(Some(0.0), s, 0.1), 1.0);
+        // One sigma off: exp(-1/2).
+        assert!((local_score(Some(s * s), s, 0.1) - (-0.5f64).exp()).abs() < 1e-12);
+        assert_eq!(local_score(None, s, 0.1), 0.1);
+    }
+}

@@ -1,0 +1,657 @@
+//! The agent H of the paper (section 3.1): a directed rooted tree whose nodes are joints
+//! rotating about one axis and whose edges are body parts approximated by cylinders.
+//!
+//! Frames: the agent frame has x forward (the way the agent faces), y to its left and
+//! z up; every joint angle is 0 in the upright standing pose. Lengths in the model file
+//! are fractions of body height H; [`Agent::load`] scales them to metres.
+
+use std::collections::HashSet;
+use std::path::Path;
+
+use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
+use serde::Deserialize;
+
+use crate::model::{parse_toml, read_text, tree_order, Key, ModelError, Source, TreeWords};
+
+/// Most joints a body model may have: a human skeleton has a few dozen; the kinematic
+/// chain is walked joint by joint on a worker thread, whose stack a chain of 100,000
+/// joints overflowed.
+pub const MAX_JOINTS: usize = 256;
+/// Furthest a joint origin or link end may be from its joint, fraction of H: ten body
+/// heights is no body, and the scene grids and drop searches grow with the body's size.
+pub const MAX_REACH: f64 = 10.0;
+/// Body heights a model may be scaled to, metres: from a toddler (0.3 m) to beyond the
+/// tallest person recorded (2.72 m); a value outside is a typo or centimetres.
+pub const HEIGHT_RANGE: std::ops::RangeInclusive<f64> = 0.3..=3.0;
+
+/// Checks a body height (metres) against [`HEIGHT_RANGE`]; the error says why, without
+/// naming where the value came from (the caller adds the flag, file or key).
+pub fn check_height(height: f64) -> Result<f64, String> {
+    crate::model::check_range(height, &HEIGHT_RANGE, "body height")
+}
+
+/// One joint (a vertex of H) with its optional body part (the edge to its parent's frame).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Joint {
+    /// Name used by hierarchy files.
+    pub name: String,
+    /// Index of the parent joint; `None` for the root (the pelvis).
+    pub parent: Option<usize>,
+    /// Position of this joint in its parent's frame, metres.
+    pub origin: Vector3<f64>,
+    /// Rotation axis in the parent's frame (unit); a positive angle turns by the right-hand rule.
+    pub axis: Unit<Vector3<f64>>,
+    /// Anatomical limits `(lower, upper)`, radians; `(0, 0)` for a fixed joint.
+    pub limit: (f64, f64),
+    /// Whether the joint turns.
+    pub kind: JointKind,
+    /// The body part carried by this joint, if any.
+    pub link: Option<Link>,
+}
+
+/// How a joint moves (the file's `type`, as in URDF).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JointKind {
+    /// Turns about its axis within its limits (degrees in the file).
+    #[default]
+    Revolute,
+    /// Does not turn: no axis, no limit (the root, whose placement is the body's).
+    Fixed,
+}
+
+/// A body part: a cylinder between two points of its joint's frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Link {
+    /// Name used by hierarchy files (for example `thigh_l`).
+    pub name: String,
+    /// Start of the cylinder axis in the joint frame, metres.
+    pub from: Point3<f64>,
+    /// End of the cylinder axis in the joint frame, metres.
+    pub to: Point3<f64>,
+    /// Cylinder radius, metres.
+    pub radius: f64,
+}
+
+/// A body part placed in the world: a cylinder from `a` to `b` (metres, world frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cylinder {
+    /// Index of the joint that carries it (also the link's index).
+    pub joint: usize,
+    /// Start of the axis, world frame, metres.
+    pub a: Point3<f64>,
+    /// End of the axis, world frame, metres.
+    pub b: Point3<f64>,
+    /// Radius, metres.
+    pub radius: f64,
+}
+
+/// The whole agent scaled to one body height, joints in topological order (parents first).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Agent {
+    /// Model name.
+    pub name: String,
+    /// Body height H, metres.
+    pub height: f64,
+    /// Joints, parents before children.
+    pub joints: Vec<Joint>,
+}
+
+/// Where the agent stands: its root joint (pelvis) in the world and its heading.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// The root joint's position, world frame, metres.
+    pub position: Point3<f64>,
+    /// Heading about world z, radians; 0 faces +x.
+    pub yaw: f64,
+}
+
+/// The state of every joint: angle (radians) and axis (unit, parent frame).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Posture {
+    /// Angle of each joint, radians, indexed like [`Agent::joints`].
+    pub angles: Vec<f64>,
+    /// Axis of each joint (a hierarchy node may turn a joint about another axis).
+    pub axes: Vec<Unit<Vector3<f64>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AgentFile {
+    name: String,
+    joint: Vec<JointFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JointFile {
+    name: String,
+    #[serde(default)]
+    parent: Option<String>,
+    #[serde(rename = "type", default)]
+    kind: JointKind,
+    origin: [f64; 3],
+    #[serde(default)]
+    axis: Option<[f64; 3]>,
+    #[serde(default)]
+    limit: Option<LimitFile>,
+    #[serde(default)]
+    link: Option<LinkFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LimitFile {
+    lower: f64,
+    upper: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LinkFile {
+    name: String,
+    from: [f64; 3],
+    to: [f64; 3],
+    radius: f64,
+}
+
+impl Agent {
+    /// Loads an agent file and scales it to body height `height` (metres).
+    pub fn load(path: &Path, height: f64) -> Result<Agent, ModelError> {
+        Self::from_toml(&read_text(path)?, path, height)
+    }
+
+    /// Parses agent TOML text (`path` only names the source in errors).
+    pub fn from_toml(text: &str, path: &Path, height: f64) -> Result<Agent, ModelError> {
+        let file: AgentFile = parse_toml(text, path)?;
+        Self::from_file(file, Source { path, text }, height)
+    }
+
+    fn from_file(file: AgentFile, src: Source, height: f64) -> Result<Agent, ModelError> {
+        if let Err(why) = check_height(height) {
+            return Err(src.invalid_outside("height", why));
+        }
+        if file.joint.len() > MAX_JOINTS {
+            return Err(src.invalid(
+                &Key::top("joint").at(MAX_JOINTS),
+                format!(
+                    "{} joints, more than the {MAX_JOINTS} a body model may have",
+                    file.joint.len()
+                ),
+            ));
+        }
+        let key = |i: usize| Key::top("joint").item(i, &file.joint[i].name);
+        let order = tree_order(
+            src,
+            &TreeWords {
+                item: "joint",
+                name_key: "name",
+            },
+            file.joint.len(),
+            key,
+            |i| &file.joint[i].name,
+            |i| file.joint[i].parent.as_deref(),
+        )?;
+        let mut link_names = HashSet::new();
+        for (i, j) in file.joint.iter().enumerate() {
+            if let Some(l) = &j.link {
+                if !link_names.insert(l.name.as_str()) {
+                    return Err(src.invalid(
+                        &key(i).key("link").key("name"),
+                        format!("duplicate link name `{}`", l.name),
+                    ));
+                }
+            }
+        }
+        let joints = order
+            .into_iter()
+            .map(|(i, parent)| Self::joint(&file.joint[i], key(i), parent, src, height))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Agent {
+            name: file.name,
+            height,
+            joints,
+        })
+    }
+
+    fn joint(
+        j: &JointFile,
+        key: Key,
+        parent: Option<usize>,
+        src: Source,
+        h: f64,
+    ) -> Result<Joint, ModelError> {
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        let near = |v: &[f64]| v.iter().all(|x| x.abs() <= MAX_REACH);
+        if !finite(&j.origin) {
+            return Err(src.invalid(&key.key("origin"), "must be finite"));
+        }
+        if !near(&j.origin) {
+            return Err(src.invalid(
+                &key.key("origin"),
+                format!("must be within {MAX_REACH} H of the parent joint"),
+            ));
+        }
+        let (axis, limit) = match (j.kind, j.axis, &j.limit) {
+            (JointKind::Fixed, None, None) => (Vector3::z(), (0.0, 0.0)),
+            (JointKind::Fixed, _, _) => {
+                let k = if j.axis.is_some() { "axis" } else { "limit" };
+                return Err(src.invalid(
+                    &key.key(k),
+                    "a fixed joint does not turn: it takes no axis and no limit",
+                ));
+            }
+            (JointKind::Revolute, None, _) | (JointKind::Revolute, _, None) => {
+                let k = if j.axis.is_none() { "axis" } else { "limit" };
+                return Err(src.invalid(
+                    &key.key(k),
+                    format!("a revolute joint needs `{k}` (or `type = \"fixed\"`)"),
+                ));
+            }
+            (JointKind::Revolute, Some(a), Some(l)) => {
+                let axis = Vector3::from(a);
+                if !finite(&a) || axis.norm() < 1e-9 {
+                    return Err(src.invalid(&key.key("axis"), "must be a non-zero vector"));
+                }
+                if !(l.lower.is_finite() && l.upper.is_finite()) || l.lower > l.upper {
+                    return Err(src.invalid(
+                        &key.key("limit"),
+                        format!("lower = {} must not exceed upper = {}", l.lower, l.upper),
+                    ));
+                }
+                (axis, (l.lower.to_radians(), l.upper.to_radians()))
+            }
+        };
+        let link = match &j.link {
+            None => None,
+            Some(l) => {
+                let lk = key.key("link");
+                for (name, v) in [("from", &l.from), ("to", &l.to)] {
+                    if !finite(v) {
+                        return Err(src.invalid(&lk.key(name), "must be finite"));
+                    }
+                    if !near(v) {
+                        return Err(src.invalid(
+                            &lk.key(name),
+                            format!("must be within {MAX_REACH} H of its joint"),
+                        ));
+                    }
+                }
+                let (from, to) = (Point3::from(l.from) * h, Point3::from(l.to) * h);
+                if (to - from).norm() < 1e-6 {
+                    return Err(src.invalid(
+                        &lk.key("to"),
+                        format!("link `{}` has zero length (from == to)", l.name),
+                    ));
+                }
+                if !(l.radius.is_finite() && l.radius > 0.0 && l.radius <= MAX_REACH) {
+                    return Err(src.invalid(
+                        &lk.key("radius"),
+                        format!(
+                            "must be positive and at most {MAX_REACH} H, not {}",
+                            l.radius
+                        ),
+                    ));
+                }
+                Some(Link {
+                    name: l.name.clone(),
+                    from,
+                    to,
+                    radius: l.radius * h,
+                })
+            }
+        };
+        Ok(Joint {
+            name: j.name.clone(),
+            parent,
+            origin: Vector3::from(j.origin) * h,
+            axis: Unit::new_normalize(axis),
+            limit,
+            kind: j.kind,
+            link,
+        })
+    }
+
+    /// Index of the joint named `name`.
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.joints.iter().position(|j| j.name == name)
+    }
+
+    /// Index of the joint carrying the link named `name`.
+    pub fn link_index(&self, name: &str) -> Option<usize> {
+        self.joints
+            .iter()
+            .position(|j| j.link.as_ref().is_some_and(|l| l.name == name))
+    }
+
+    /// The upright standing posture: every angle 0, every axis as in the model.
+    pub fn rest_posture(&self) -> Posture {
+        Posture {
+            angles: vec![0.0; self.joints.len()],
+            axes: self.joints.iter().map(|j| j.axis).collect(),
+        }
+    }
+
+    /// Whether joint `j` lies in the subtree of joint `root` (itself included).
+    pub fn is_descendant(&self, j: usize, root: usize) -> bool {
+        let mut k = Some(j);
+        while let Some(i) = k {
+            if i == root {
+                return true;
+            }
+            k = self.joints[i].parent;
+        }
+        false
+    }
+
+    /// Forward kinematics: the world frame of every joint for a placement and posture,
+    /// written into `frames` (resized to the number of joints).
+    pub fn forward_kinematics(
+        &self,
+        place: &Placement,
+        posture: &Posture,
+        frames: &mut Vec<Isometry3<f64>>,
+    ) {
+        frames.clear();
+        let base = Isometry3::from_parts(
+            Translation3::from(place.position.coords),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), place.yaw),
+        );
+        for (i, j) in self.joints.iter().enumerate() {
+            let parent = j.parent.map_or(base, |p| frames[p]);
+            let local = Isometry3::from_parts(
+                Translation3::from(j.origin),
+                UnitQuaternion::from_axis_angle(&posture.axes[i], posture.angles[i]),
+            );
+            frames.push(parent * local);
+        }
+    }
+
+    /// The posed body parts (world frame) of the joints selected by `which`.
+    pub fn cylinders(
+        &self,
+        frames: &[Isometry3<f64>],
+        which: impl Fn(usize) -> bool,
+    ) -> Vec<Cylinder> {
+        self.joints
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| which(*i))
+            .filter_map(|(i, j)| {
+                j.link.as_ref().map(|l| Cylinder {
+                    joint: i,
+                    a: frames[i] * l.from,
+                    b: frames[i] * l.to,
+                    radius: l.radius,
+                })
+            })
+            .collect()
+    }
+
+    /// Largest distance (metres) from any point of the subtree of joint `j` to that joint's
+    /// origin, in any posture: bounds how far a rotation of `j` by one radian moves its parts.
+    pub fn reach(&self, j: usize) -> f64 {
+        fn depth(agent: &Agent, j: usize) -> f64 {
+            let own = agent.joints[j].link.as_ref().map_or(0.0, |l| {
+                l.from.coords.norm().max(l.to.coords.norm()) + l.radius
+            });
+            let kids = agent
+                .joints
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.parent == Some(j))
+                .map(|(c, cj)| cj.origin.norm() + depth(agent, c))
+                .fold(0.0, f64::max);
+            own.max(kids)
+        }
+        depth(self, j)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::line_of;
+
+    const TWO_LINKS: &str = r#"
+name = "leg"
+[[joint]]
+name = "hip"
+origin = [0.0, 0.0, 0.5]
+axis = [0.0, -1.0, 0.0]
+limit = { lower = -30.0, upper = 120.0 }
+link = { name = "thigh", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius = 0.04 }
+[[joint]]
+name = "knee"
+parent = "hip"
+origin = [0.0, 0.0, -0.25]
+axis = [0.0, 1.0, 0.0]
+limit = { lower = 0.0, upper = 150.0 }
+link = { name = "shank", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius = 0.03 }
+"#;
+
+    fn leg(h: f64) -> Agent {
+        Agent::from_toml(TWO_LINKS, Path::new("leg.toml"), h).unwrap()
+    }
+
+    #[test]
+    fn scales_lengths_by_height() {
+        let a = leg(2.0);
+        assert_eq!(a.joints[1].origin, Vector3::new(0.0, 0.0, -0.5));
+        assert!((a.joints[0].link.as_ref().unwrap().radius - 0.08).abs() < 1e-12);
+    }
+
+    #[test]
+    fn forward_kinematics_of_a_seated_leg() {
+        // H = 2 m: hip at z = 1.0; thigh 0.5 m, shank 0.5 m. Hip flexed 90 deg about -y
+        // puts the thigh forward (+x); knee flexed 90 deg about +y brings the shank down.
+        let a = leg(2.0);
+        let mut p = a.rest_posture();
+        p.angles = vec![90f64.to_radians(), 90f64.to_radians()];
+        let mut f = Vec::new();
+        let place = Placement {
+            position: Point3::new(1.0, 2.0, 0.0),
+            yaw: 0.0,
+        };
+        a.forward_kinematics(&place, &p, &mut f);
+        let c = a.cylinders(&f, |_| true);
+        assert!(
+            (c[0].b - Point3::new(1.5, 2.0, 1.0)).norm() < 1e-9,
+            "knee at {:?}",
+            c[0].b
+        );
+        assert!(
+            (c[1].b - Point3::new(1.5, 2.0, 0.5)).norm() < 1e-9,
+            "ankle at {:?}",
+            c[1].b
+        );
+        // Turning the agent by 90 deg about z makes it face +y.
+        let place = Placement {
+            yaw: 90f64.to_radians(),
+            ..place
+        };
+        a.forward_kinematics(&place, &p, &mut f);
+        let c = a.cylinders(&f, |_| true);
+        assert!(
+            (c[0].b - Point3::new(1.0, 2.5, 1.0)).norm() < 1e-9,
+            "knee at {:?}",
+            c[0].b
+        );
+    }
+
+    #[test]
+    fn reach_bounds_the_subtree() {
+        let a = leg(1.0);
+        // From the hip: 0.25 to the knee + 0.25 shank + 0.03 radius.
+        assert!((a.reach(0) - 0.53).abs() < 1e-9);
+        assert!((a.reach(1) - 0.28).abs() < 1e-9);
+    }
+
+    /// The error loading `text` as `x.toml`.
+    fn error(text: &str) -> String {
+        Agent::from_toml(text, Path::new("x.toml"), 1.75)
+            .unwrap_err()
+            .to_string()
+    }
+
+    /// Asserts that `e` starts with `x.toml:LINE: KEY: ` and mentions `what`.
+    fn names(e: &str, line: usize, key: &str, what: &str) {
+        assert!(
+            e.starts_with(&format!("x.toml:{line}: {key}: ")) && e.contains(what),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn an_unknown_parent_is_named() {
+        let bad = TWO_LINKS.replace("parent = \"hip\"", "parent = \"hips\"");
+        let line = line_of(&bad, "parent = \"hips\"", 0);
+        names(
+            &error(&bad),
+            line,
+            "joint.knee.parent",
+            "depends on a missing joint `hips`",
+        );
+    }
+
+    #[test]
+    fn a_cycle_of_joints_is_named() {
+        let bad = format!(
+            "{TWO_LINKS}{}",
+            r#"
+[[joint]]
+name = "toe"
+parent = "heel"
+origin = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+limit = { lower = 0.0, upper = 10.0 }
+[[joint]]
+name = "heel"
+parent = "toe"
+origin = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+limit = { lower = 0.0, upper = 10.0 }
+"#
+        );
+        let line = line_of(&bad, "parent = \"heel\"", 0);
+        names(&error(&bad), line, "joint.toe.parent", "cycle");
+        assert!(error(&bad).contains("toe -> heel -> toe"));
+    }
+
+    #[test]
+    fn a_zero_length_link_is_named() {
+        let bad = TWO_LINKS.replace(
+            "to = [0.0, 0.0, -0.25], radius = 0.03",
+            "to = [0.0, 0.0, 0.0], radius = 0.03",
+        );
+        let line = line_of(&bad, "name = \"shank\"", 0);
+        names(
+            &error(&bad),
+            line,
+            "joint.knee.link.to",
+            "`shank` has zero length",
+        );
+    }
+
+    #[test]
+    fn a_non_positive_radius_is_named() {
+        for radius in ["0.0", "-0.03", "nan"] {
+            let bad = TWO_LINKS.replace("radius = 0.03", &format!("radius = {radius}"));
+            let line = line_of(&bad, "name = \"shank\"", 0);
+            names(
+                &error(&bad),
+                line,
+                "joint.knee.link.radius",
+                "must be positive",
+            );
+        }
+    }
+
+    #[test]
+    fn duplicate_names_are_named_where_repeated() {
+        let bad = TWO_LINKS.replace("name = \"knee\"", "name = \"hip\"");
+        let line = line_of(&bad, "name = \"hip\"", 1);
+        names(
+            &error(&bad),
+            line,
+            "joint.hip.name",
+            "duplicate joint name `hip`",
+        );
+        let bad = TWO_LINKS.replace("name = \"shank\"", "name = \"thigh\"");
+        let line = line_of(&bad, "name = \"thigh\"", 1);
+        names(
+            &error(&bad),
+            line,
+            "joint.knee.link.name",
+            "duplicate link name `thigh`",
+        );
+    }
+
+    #[test]
+    fn a_second_root_is_named() {
+        let bad = TWO_LINKS.replace("parent = \"hip\"\n", "");
+        let line = line_of(&bad, "name = \"knee\"", 0);
+        names(&error(&bad), line, "joint.knee.name", "root (`hip`)");
+    }
+
+    #[test]
+    fn impossible_axes_and_limits_are_named() {
+        let bad = TWO_LINKS.replace("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 0.0, 0.0]");
+        let line = line_of(&bad, "axis = [0.0, 0.0, 0.0]", 0);
+        names(&error(&bad), line, "joint.knee.axis", "non-zero");
+        let bad = TWO_LINKS.replace("lower = 0.0, upper = 150.0", "lower = 150.0, upper = 0.0");
+        let line = line_of(&bad, "lower = 150.0", 0);
+        names(&error(&bad), line, "joint.knee.limit", "must not exceed");
+    }
+
+    #[test]
+    fn an_unknown_key_is_named_with_its_line() {
+        let bad = TWO_LINKS.replace(
+            "axis = [0.0, 1.0, 0.0]",
+            "axis = [0.0, 1.0, 0.0]\ncolour = 3",
+        );
+        let line = line_of(&bad, "colour", 0);
+        names(
+            &error(&bad),
+            line,
+            "joint.knee.colour",
+            "unknown field `colour`",
+        );
+    }
+
+    #[test]
+    fn a_fixed_joint_takes_no_axis_or_limit_and_a_revolute_one_needs_both() {
+        let fixed = TWO_LINKS.replacen(
+            "axis = [0.0, -1.0, 0.0]\nlimit = { lower = -30.0, upper = 120.0 }",
+            "type = \"fixed\"",
+            1,
+        );
+        let a = Agent::from_toml(&fixed, Path::new("x.toml"), 1.75).unwrap();
+        assert_eq!(a.joints[0].kind, JointKind::Fixed);
+        assert_eq!(a.joints[0].limit, (0.0, 0.0));
+        assert_eq!(a.joints[1].kind, JointKind::Revolute);
+        // A fixed joint with a limit: named.
+        let bad = TWO_LINKS.replacen("axis = [0.0, -1.0, 0.0]\n", "type = \"fixed\"\n", 1);
+        names(
+            &error(&bad),
+            7,
+            "joint.hip.limit",
+            "a fixed joint does not turn",
+        );
+        // A revolute joint without a limit: named.
+        let bad = TWO_LINKS.replacen("limit = { lower = 0.0, upper = 150.0 }\n", "", 1);
+        let e = error(&bad);
+        assert!(
+            e.contains(": joint.knee.limit: a revolute joint needs `limit`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_height_out_of_range_names_no_line() {
+        let e = Agent::from_toml(TWO_LINKS, Path::new("x.toml"), 17.5)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "x.toml: height: body height 17.5 m is outside 0.3-3.0 m");
+    }
+}

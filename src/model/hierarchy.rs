@@ -1,0 +1,1124 @@
+//! The affordance hierarchy A of section 3.2: an initial pose H_A and a rooted tree of
+//! fine-grained affordances F = (J_F, E_F), each edge carrying a true/false constraint,
+//! plus the hypothesis rule (section 4.1) and the fitting and scoring parameters
+//! (sections 4.2-4.4) that the paper leaves free.
+//!
+//! Angles in the file are degrees; lengths are metres unless the key says "fraction of H".
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use nalgebra::{Unit, Vector3};
+use serde::Deserialize;
+
+use crate::method::fuzzy::{Availability, Low, Trapezoid};
+use crate::model::agent::{Agent, Posture};
+use crate::model::{parse_toml, read_text, tree_order, Key, ModelError, Source, TreeWords};
+
+/// How the agent's heading relates to the height-gradient descent (section 4.1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Orientation {
+    /// Facing along the descent (sitting).
+    Parallel,
+    /// Lying across it (lying).
+    Orthogonal,
+}
+
+/// The hypothesis rule of section 4.1 (Fig. 5).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HypothesisRule {
+    /// Diameter of the circular torso template, fraction of H.
+    pub template_diameter: f64,
+    /// Radius of the neighbourhood whose plane fit gives the height gradient, fraction of H.
+    pub gradient_radius: f64,
+    /// Slope (m/m) below which the gradient gives no heading and every heading is tried.
+    pub flat_gradient: f64,
+    /// "Discontinuity is low": share of invalid cells under the template.
+    pub discontinuity: Low,
+    /// "Roughness is low": standard deviation of heights under the template, metres.
+    pub roughness: Low,
+    /// "Height is comfortable": mean height under the template, fractions of H;
+    /// absent to switch the height membership off.
+    #[serde(default)]
+    pub height: Option<Trapezoid>,
+    /// The availability sets used for defuzzification (Fig. 5d).
+    pub available: Availability,
+    /// Distance between the cells tried, fraction of H (an extension: a lying body is
+    /// 1.7 m long, so places 5 cm apart are the same place); absent: every cell.
+    #[serde(default)]
+    pub spacing: Option<f64>,
+}
+
+/// Parameters of the initial agent fitting (section 4.2).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitRule {
+    /// Headings tried around the hypothesis heading, radians.
+    pub yaw_offsets: Vec<f64>,
+    /// Step of the all-round heading search used when no offset heading is free, radians.
+    pub fallback_yaw_step: f64,
+    /// Height of the pelvis bottom above the highest cell under the template at the start, metres.
+    pub start_clearance: f64,
+    /// Furthest the agent is lowered below the hypothesis height before it is given up, metres.
+    pub max_drop: f64,
+    /// sigma_d of Eq. 1, metres.
+    pub sigma_d: f64,
+    /// Stability (Eq. 1) below which a fit is discarded.
+    pub min_stability: f64,
+    /// Stabilities within this much of the best count as equal when the orientation is chosen.
+    pub stability_band: f64,
+    /// Spacing of the samples along each stability link (Eq. 1), metres.
+    pub sample_spacing: f64,
+    /// Links whose distances to the scene make the stability score (joint indices).
+    pub stability_links: Vec<usize>,
+    /// Links left out of the collision tests of the fitting, because a node unfolds them
+    /// afterwards (joint indices).
+    pub unchecked_links: Vec<usize>,
+    /// Links a node unfolds afterwards that are checked while fitting, except when no
+    /// heading fits with them: then the fit is tried again without them, so that arms
+    /// raised for an armrest do not lose a seat whose arm rails they meet (joint indices).
+    pub deferred_links: Vec<usize>,
+}
+
+/// How the best pose of a hypothesis, and the strongest of neighbouring detections, are chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Selection {
+    /// By the accumulated score of Eq. 5 alone (the paper).
+    Score,
+    /// By the number of fine-grained affordances found, then by the score: Eq. 5 saturates
+    /// near 1 once two nodes score well, so a further affordance barely moves it.
+    MostSpecific,
+}
+
+/// Parameters of the scores (Eq. 3-5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScoreRule {
+    /// sigma_theta of Eq. 3, radians.
+    pub sigma_theta: f64,
+    /// epsilon of Eq. 3: the local score of a link without contact.
+    pub epsilon: f64,
+    /// Cosine of the largest angle between a contact's normal and a node's `release`
+    /// direction for the contact to count as support.
+    pub support_cos: f64,
+    /// How poses and detections are ranked.
+    pub select: Selection,
+    /// Local score (Eq. 3-4) below which a contact does not count as the affordance.
+    pub min_local: f64,
+}
+
+/// One joint constraint (theta1, theta2, theta_d, axis, joint) of J_F.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sweep {
+    /// Joint index in the agent.
+    pub joint: usize,
+    /// Start angle, radians.
+    pub theta1: f64,
+    /// End angle, radians: above or below theta1 (a sweep may run either way).
+    pub theta2: f64,
+    /// Default (preferred) angle, radians.
+    pub thetad: f64,
+    /// Axis of the rotation (parent frame, unit).
+    pub axis: Unit<Vector3<f64>>,
+}
+
+/// A fine-grained affordance F = (J_F, E_F) and its edge to its parent.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Node {
+    /// Affordance id (`sitting`, `backrest`, ...).
+    pub id: String,
+    /// Index of the parent node; `None` for the root.
+    pub parent: Option<usize>,
+    /// Constraint c on the edge from the parent: processed when the parent's contact state equals it.
+    pub when: bool,
+    /// E_F: the links (joint indices) checked for contact.
+    pub links: Vec<usize>,
+    /// For each link of `links`, the part checked, as fractions `[from, to]` of its length
+    /// (an armrest carries the forearm near the elbow, not at the wrist).
+    pub spans: Vec<[f64; 2]>,
+    /// J_F: the joints swept.
+    pub sweeps: Vec<Sweep>,
+    /// Joints held at each of several angles in turn while J_F is swept (an extension of
+    /// the paper: the arm looks for an armrest at several abductions); each kinematic
+    /// branch keeps the setting that scores best.
+    pub spreads: Vec<Spread>,
+    /// Joints held within a range while this node is judged (an extension of the paper:
+    /// a headrest is judged at a plausible trunk recline); kept when the node is found.
+    pub clamps: Vec<Clamp>,
+    /// When set, a contact counts only if the scene holds the touching links from the side
+    /// opposite this direction (agent frame: x forward, z up): `[0, 0, 1]` means "from
+    /// below", so an armrest counts and a wall beside the arm does not.
+    pub release: Option<nalgebra::Vector3<f64>>,
+    /// Whether a contact already at theta1 is refused: the links had no room to unfold
+    /// (shanks that start in a mattress are not hanging from a seat).
+    pub free_start: bool,
+    /// Whether one touching kinematic branch suffices for the affordance, or all must touch.
+    pub contact: ContactRule,
+    /// Parts that must rest on the scene at a contact (an extension of the paper: lying
+    /// needs the back of the head and the heels supported, not only the trunk): at the
+    /// contact, some part of each branch's support links (joint index, span) must have the
+    /// scene within `support_gap` straight below it. Empty: any contact counts.
+    pub support: Vec<(usize, [f64; 2])>,
+    /// See `support`, metres.
+    pub support_gap: f64,
+}
+
+/// How many of a node's kinematic branches must touch for its affordance to be found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactRule {
+    /// One branch (the paper: "either a collision occurred or not"); one armrest suffices.
+    #[default]
+    Any,
+    /// Every branch (an extension: lying needs the head and both heels supported).
+    All,
+}
+
+/// A joint held within `[lower, upper]` (radians) while a node is judged.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Clamp {
+    /// Joint index in the agent.
+    pub joint: usize,
+    /// Lowest angle, radians.
+    pub lower: f64,
+    /// Highest angle, radians.
+    pub upper: f64,
+}
+
+/// A joint tried at several fixed angles (radians) during a node's sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Spread {
+    /// Joint index in the agent.
+    pub joint: usize,
+    /// Angles tried, radians, in order (the first is kept when nothing is touched).
+    pub angles: Vec<f64>,
+}
+
+/// A whole affordance hierarchy resolved against an agent.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hierarchy {
+    /// Name of the coarse affordance (`sitting`).
+    pub name: String,
+    /// Heading relative to the gradient descent.
+    pub orientation: Orientation,
+    /// Section 4.1.
+    pub hypothesis: HypothesisRule,
+    /// Section 4.2.
+    pub fit: FitRule,
+    /// Section 4.4.
+    pub score: ScoreRule,
+    /// Radius within which weaker detections are suppressed (section 4.5), fraction of H.
+    pub suppression_radius: f64,
+    /// H_A: the initial pose.
+    pub initial: Posture,
+    /// Nodes, parents before children; node 0 is the root.
+    pub nodes: Vec<Node>,
+    /// How detections are drawn (pictures, meshes, segment files): affordance ids with
+    /// their sRGB colours, coarsest first; a detection takes the colour of the last entry
+    /// it affords. From the file's `legend`, or, without one, every node in node order
+    /// with the colours of [`NODE_PALETTE`].
+    pub legend: Vec<(String, [u8; 3])>,
+}
+
+/// Colours given to the nodes of a hierarchy file that has no `legend`, in node order
+/// (cycled): distinct hues that read on white and on the height map's viridis.
+pub const NODE_PALETTE: [[u8; 3]; 8] = [
+    [255, 140, 0],
+    [225, 35, 150],
+    [40, 160, 255],
+    [120, 230, 40],
+    [140, 80, 220],
+    [230, 200, 0],
+    [0, 185, 185],
+    [170, 110, 60],
+];
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    name: String,
+    orientation: Orientation,
+    suppression_radius: f64,
+    hypothesis: HypothesisRule,
+    fit: FitFile,
+    score: ScoreFile,
+    initial_pose: BTreeMap<String, f64>,
+    node: Vec<NodeFile>,
+    #[serde(default)]
+    legend: Vec<LegendFile>,
+}
+
+/// One entry of the file's `legend`: an affordance id and its colour (sRGB, 0-255).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LegendFile {
+    id: String,
+    colour: [u8; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FitFile {
+    yaw_offsets: Vec<f64>,
+    fallback_yaw_step: f64,
+    start_clearance: f64,
+    max_drop: f64,
+    sigma_d: f64,
+    min_stability: f64,
+    stability_band: f64,
+    sample_spacing: f64,
+    stability_links: Vec<String>,
+    #[serde(default)]
+    unchecked_links: Vec<String>,
+    #[serde(default)]
+    deferred_links: Vec<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScoreFile {
+    sigma_theta: f64,
+    epsilon: f64,
+    support_angle: f64,
+    select: Selection,
+    min_local: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NodeFile {
+    id: String,
+    #[serde(default)]
+    parent: Option<String>,
+    #[serde(default = "yes")]
+    when: bool,
+    links: Vec<LinkRef>,
+    sweep: Vec<SweepFile>,
+    #[serde(default)]
+    spread: Vec<SpreadFile>,
+    #[serde(default)]
+    clamp: Vec<ClampFile>,
+    #[serde(default)]
+    release: Option<[f64; 3]>,
+    #[serde(default)]
+    free_start: bool,
+    #[serde(default)]
+    contact: ContactRule,
+    #[serde(default)]
+    support: Vec<LinkRef>,
+    #[serde(default)]
+    support_gap: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ClampFile {
+    joint: String,
+    lower: f64,
+    upper: f64,
+}
+
+/// A link of E_F: its name, or its name and the span checked.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum LinkRef {
+    Name(String),
+    Span { link: String, span: [f64; 2] },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SpreadFile {
+    joint: String,
+    angles: Vec<f64>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SweepFile {
+    joint: String,
+    theta1: f64,
+    theta2: f64,
+    thetad: f64,
+    #[serde(default)]
+    axis: Option<[f64; 3]>,
+}
+
+impl Hierarchy {
+    /// Loads a hierarchy file and resolves its joint and link names against `agent`.
+    pub fn load(path: &Path, agent: &Agent) -> Result<Hierarchy, ModelError> {
+        Self::from_toml(&read_text(path)?, path, agent)
+    }
+
+    /// Parses hierarchy TOML text (`path` only names the source in errors).
+    pub fn from_toml(text: &str, path: &Path, agent: &Agent) -> Result<Hierarchy, ModelError> {
+        let file: File = parse_toml(text, path)?;
+        Self::resolve(file, Source { path, text }, agent)
+    }
+
+    fn resolve(file: File, src: Source, agent: &Agent) -> Result<Hierarchy, ModelError> {
+        check_numbers(&file, src)?;
+        check_limits(&file, src)?;
+        let names = Names { src, agent };
+        let mut initial = agent.rest_posture();
+        for (name, deg) in &file.initial_pose {
+            let key = Key::top("initial_pose").key(name);
+            let j = names.joint(&key, name)?;
+            if !deg.is_finite() {
+                return Err(src.invalid(&key, "must be a finite angle"));
+            }
+            names.within_limit(&key, j, &agent.joints[j].axis, *deg)?;
+            initial.angles[j] = deg.to_radians();
+        }
+        let fit = Key::top("fit");
+        let stability_links =
+            names.links(&fit.key("stability_links"), &file.fit.stability_links)?;
+        if stability_links.is_empty() {
+            return Err(src.invalid(
+                &fit.key("stability_links"),
+                "needs at least one link (what rests on the seat)",
+            ));
+        }
+        let unchecked_links =
+            names.links(&fit.key("unchecked_links"), &file.fit.unchecked_links)?;
+        let deferred_links = names.links(&fit.key("deferred_links"), &file.fit.deferred_links)?;
+        let key = |i: usize| Key::top("node").item(i, &file.node[i].id);
+        let order = tree_order(
+            src,
+            &TreeWords {
+                item: "node",
+                name_key: "id",
+            },
+            file.node.len(),
+            key,
+            |i| &file.node[i].id,
+            |i| file.node[i].parent.as_deref(),
+        )?;
+        let nodes = order
+            .into_iter()
+            .map(|(i, parent)| resolve_node(&file.node[i], &key(i), parent, &names))
+            .collect::<Result<Vec<_>, _>>()?;
+        let legend = resolve_legend(&file, src, &nodes)?;
+        let f = &file.fit;
+        Ok(Hierarchy {
+            name: file.name,
+            orientation: file.orientation,
+            hypothesis: file.hypothesis,
+            fit: FitRule {
+                yaw_offsets: f.yaw_offsets.iter().map(|d| d.to_radians()).collect(),
+                fallback_yaw_step: f.fallback_yaw_step.to_radians(),
+                start_clearance: f.start_clearance,
+                max_drop: f.max_drop,
+                sigma_d: f.sigma_d,
+                min_stability: f.min_stability,
+                stability_band: f.stability_band,
+                sample_spacing: f.sample_spacing,
+                stability_links,
+                unchecked_links,
+                deferred_links,
+            },
+            score: ScoreRule {
+                sigma_theta: file.score.sigma_theta.to_radians(),
+                epsilon: file.score.epsilon,
+                support_cos: file.score.support_angle.to_radians().cos(),
+                select: file.score.select,
+                min_local: file.score.min_local,
+            },
+            suppression_radius: file.suppression_radius,
+            initial,
+            nodes,
+            legend,
+        })
+    }
+
+    /// The affordance ids, in node order (root first).
+    pub fn ids(&self) -> Vec<&str> {
+        self.nodes.iter().map(|n| n.id.as_str()).collect()
+    }
+}
+
+/// The hierarchy's legend: the file's `legend` (every id a node's, none twice), or every
+/// node in node order with the colours of [`NODE_PALETTE`].
+fn resolve_legend(
+    file: &File,
+    src: Source,
+    nodes: &[Node],
+) -> Result<Vec<(String, [u8; 3])>, ModelError> {
+    if file.legend.is_empty() {
+        return Ok(nodes
+            .iter()
+            .zip(NODE_PALETTE.iter().cycle())
+            .map(|(n, c)| (n.id.clone(), *c))
+            .collect());
+    }
+    let mut legend: Vec<(String, [u8; 3])> = Vec::with_capacity(file.legend.len());
+    for (i, e) in file.legend.iter().enumerate() {
+        let key = Key::top("legend").item(i, &e.id).key("id");
+        if !nodes.iter().any(|n| n.id == e.id) {
+            return Err(src.invalid(&key, format!("`{}` is not the id of a node", e.id)));
+        }
+        if legend.iter().any(|(id, _)| *id == e.id) {
+            return Err(src.invalid(&key, format!("`{}` is listed twice", e.id)));
+        }
+        legend.push((e.id.clone(), e.colour));
+    }
+    Ok(legend)
+}
+
+/// What a number of the hierarchy file must be.
+#[derive(Debug, Clone, Copy)]
+enum Bound {
+    /// Finite and above 0.
+    Positive,
+    /// Finite and at least 0.
+    NonNegative,
+    /// Between 0 and 1, both included.
+    Fraction,
+}
+
+impl Bound {
+    fn holds(self, v: f64) -> bool {
+        match self {
+            Bound::Positive => v.is_finite() && v > 0.0,
+            Bound::NonNegative => v.is_finite() && v >= 0.0,
+            Bound::Fraction => (0.0..=1.0).contains(&v),
+        }
+    }
+
+    fn what(self, v: f64) -> String {
+        match self {
+            Bound::Positive => format!("must be positive, not {v}"),
+            Bound::NonNegative => format!("must not be negative, not {v}"),
+            Bound::Fraction => format!("must be between 0 and 1, not {v}"),
+        }
+    }
+}
+
+/// The largest (or smallest) values the hypothesis and fit numbers may take: beyond them
+/// the work grows without bound (template cells with the square of the diameter, samples
+/// with 1 / spacing, drop steps with the clearance) and no body is described any more.
+/// Each entry: key, value, least, most, reason.
+fn check_limits(file: &File, src: Source) -> Result<(), ModelError> {
+    let (hyp, fit) = (Key::top("hypothesis"), Key::top("fit"));
+    let (h, f) = (&file.hypothesis, &file.fit);
+    for (key, v, lo, hi, why) in [
+        (
+            hyp.key("template_diameter"),
+            h.template_diameter,
+            0.0,
+            2.0,
+            "fraction of H: a template wider than two bodies holds no place a body rests on",
+        ),
+        (
+            hyp.key("gradient_radius"),
+            h.gradient_radius,
+            0.0,
+            2.0,
+            "fraction of H: a neighbourhood beyond two bodies is no longer the seat's",
+        ),
+        (
+            hyp.key("spacing"),
+            h.spacing.unwrap_or(0.1),
+            0.0,
+            2.0,
+            "fraction of H: places further apart than two bodies miss whole seats",
+        ),
+        (
+            Key::top("suppression_radius"),
+            file.suppression_radius,
+            0.0,
+            10.0,
+            "fraction of H: beyond ten bodies one detection would hide a whole building",
+        ),
+        (
+            fit.key("start_clearance"),
+            f.start_clearance,
+            0.0,
+            2.0,
+            "metres: the body starts just above the seat; the drop search grows with it",
+        ),
+        (
+            fit.key("max_drop"),
+            f.max_drop,
+            0.0,
+            3.0,
+            "metres: further below a seat than a room is high is no support",
+        ),
+        (
+            fit.key("sample_spacing"),
+            f.sample_spacing,
+            0.001,
+            1.0,
+            "metres: under 1 mm (a fifth of the 5 mm contact step) adds samples, not accuracy",
+        ),
+        (
+            fit.key("fallback_yaw_step"),
+            f.fallback_yaw_step,
+            0.5,
+            360.0,
+            "degrees: finer than half a degree (720 headings) only multiplies the fits",
+        ),
+    ] {
+        if !(lo..=hi).contains(&v) {
+            return Err(src.invalid(&key, format!("{v} is outside {lo}-{hi} ({why})")));
+        }
+    }
+    Ok(())
+}
+
+/// Checks the numbers of the hypothesis, fit and score sections.
+fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
+    let (hyp, fit, score) = (Key::top("hypothesis"), Key::top("fit"), Key::top("score"));
+    let (h, f, s) = (&file.hypothesis, &file.fit, &file.score);
+    use Bound::*;
+    for (key, v, bound) in [
+        (hyp.key("template_diameter"), h.template_diameter, Positive),
+        (hyp.key("gradient_radius"), h.gradient_radius, Positive),
+        (hyp.key("flat_gradient"), h.flat_gradient, NonNegative),
+        (
+            Key::top("suppression_radius"),
+            file.suppression_radius,
+            Positive,
+        ),
+        (fit.key("fallback_yaw_step"), f.fallback_yaw_step, Positive),
+        (fit.key("start_clearance"), f.start_clearance, NonNegative),
+        (fit.key("max_drop"), f.max_drop, NonNegative),
+        (fit.key("sigma_d"), f.sigma_d, Positive),
+        (fit.key("min_stability"), f.min_stability, Fraction),
+        (fit.key("stability_band"), f.stability_band, NonNegative),
+        (fit.key("sample_spacing"), f.sample_spacing, Positive),
+        (score.key("sigma_theta"), s.sigma_theta, Positive),
+        (score.key("epsilon"), s.epsilon, Positive),
+        (score.key("epsilon"), s.epsilon, Fraction),
+        (score.key("min_local"), s.min_local, Fraction),
+    ] {
+        if !bound.holds(v) {
+            return Err(src.invalid(&key, bound.what(v)));
+        }
+    }
+    if !(0.0..=180.0).contains(&s.support_angle) {
+        return Err(src.invalid(
+            &score.key("support_angle"),
+            format!("must be 0-180 degrees, not {}", s.support_angle),
+        ));
+    }
+    if let Some(v) = h.spacing {
+        if !Positive.holds(v) {
+            return Err(src.invalid(&hyp.key("spacing"), Positive.what(v)));
+        }
+    }
+    if let Some(k) = f.yaw_offsets.iter().position(|y| !y.is_finite()) {
+        return Err(src.invalid(&fit.key("yaw_offsets").at(k), "must be finite"));
+    }
+    // Fuzzy sets: their breakpoints in order.
+    let mut sets = vec![
+        (
+            hyp.key("discontinuity"),
+            vec![h.discontinuity.full, h.discontinuity.zero],
+        ),
+        (
+            hyp.key("roughness"),
+            vec![h.roughness.full, h.roughness.zero],
+        ),
+        (hyp.key("available"), h.available.rise.to_vec()),
+    ];
+    if let Some(t) = h.height {
+        sets.push((hyp.key("height"), vec![t.a, t.b, t.c, t.d]));
+    }
+    for (key, points) in sets {
+        if points.iter().any(|v| !v.is_finite()) || points.windows(2).any(|w| w[0] > w[1]) {
+            return Err(src.invalid(
+                &key,
+                format!("needs finite values in increasing order, not {points:?}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Resolves joint and link names of a hierarchy file against the agent.
+struct Names<'a> {
+    src: Source<'a>,
+    agent: &'a Agent,
+}
+
+impl Names<'_> {
+    /// Checks that `deg` (degrees, about `axis`) is within the agent's limit of joint `j`.
+    /// An angle about the joint's own axis is compared as it is, about the reversed axis
+    /// with its sign turned; about any other axis there is no limit to compare with.
+    fn within_limit(
+        &self,
+        key: &Key,
+        j: usize,
+        axis: &Unit<Vector3<f64>>,
+        deg: f64,
+    ) -> Result<(), ModelError> {
+        let joint = &self.agent.joints[j];
+        let along = joint.axis.dot(axis);
+        let own = if along > 1.0 - 1e-9 {
+            deg
+        } else if along < -1.0 + 1e-9 {
+            -deg
+        } else {
+            return Ok(());
+        };
+        let (lo, hi) = (joint.limit.0.to_degrees(), joint.limit.1.to_degrees());
+        // A tolerance for the round trip of the limit through radians.
+        if own < lo - 1e-9 || own > hi + 1e-9 {
+            return Err(self.src.invalid(
+                key,
+                format!(
+                    "joint `{}` at {own} deg is outside its limit {lo:.1} to {hi:.1} deg (agent `{}`)",
+                    joint.name, self.agent.name
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn joint(&self, key: &Key, name: &str) -> Result<usize, ModelError> {
+        self.agent.joint_index(name).ok_or_else(|| {
+            self.src.invalid(
+                key,
+                format!(
+                    "unknown joint `{name}` (not in agent `{}`)",
+                    self.agent.name
+                ),
+            )
+        })
+    }
+
+    fn link(&self, key: &Key, name: &str) -> Result<usize, ModelError> {
+        self.agent.link_index(name).ok_or_else(|| {
+            self.src.invalid(
+                key,
+                format!("unknown link `{name}` (not in agent `{}`)", self.agent.name),
+            )
+        })
+    }
+
+    /// The links named by the array at `key`, each named once.
+    fn links(&self, key: &Key, names: &[String]) -> Result<Vec<usize>, ModelError> {
+        let mut out = Vec::with_capacity(names.len());
+        for (k, name) in names.iter().enumerate() {
+            let l = self.link(&key.at(k), name)?;
+            if out.contains(&l) {
+                return Err(self
+                    .src
+                    .invalid(&key.at(k), format!("link `{name}` is listed twice")));
+            }
+            out.push(l);
+        }
+        Ok(out)
+    }
+}
+
+/// Resolves one node (`key` locates it in the file; `parent` is its parent's index in
+/// the ordered nodes).
+fn resolve_node(
+    n: &NodeFile,
+    key: &Key,
+    parent: Option<usize>,
+    names: &Names,
+) -> Result<Node, ModelError> {
+    let (src, agent) = (names.src, names.agent);
+    let (links, spans): (Vec<usize>, Vec<[f64; 2]>) =
+        spanned_links(&n.links, &key.key("links"), names)?
+            .into_iter()
+            .unzip();
+    let support = spanned_links(&n.support, &key.key("support"), names)?;
+    if !(n.support_gap.is_finite() && n.support_gap >= 0.0) {
+        return Err(src.invalid(&key.key("support_gap"), "must be 0 or more metres"));
+    }
+    if links.is_empty() {
+        return Err(src.invalid(&key.key("links"), "a node needs at least one link to check"));
+    }
+    let mut sweeps: Vec<Sweep> = Vec::new();
+    for (k, s) in n.sweep.iter().enumerate() {
+        let sk = key.key("sweep").item(k, &s.joint);
+        let j = names.joint(&sk.key("joint"), &s.joint)?;
+        for (name, v) in [
+            ("theta1", s.theta1),
+            ("theta2", s.theta2),
+            ("thetad", s.thetad),
+        ] {
+            if !v.is_finite() {
+                return Err(src.invalid(&sk.key(name), "must be a finite angle"));
+            }
+        }
+        if sweeps.iter().any(|o| o.joint == j) {
+            return Err(src.invalid(
+                &sk.key("joint"),
+                format!("joint `{}` is swept twice", s.joint),
+            ));
+        }
+        if !links.iter().any(|&l| agent.is_descendant(l, j)) {
+            return Err(src.invalid(
+                &sk.key("joint"),
+                format!(
+                    "joint `{}` moves none of the node's links, so its sweep can touch nothing",
+                    s.joint
+                ),
+            ));
+        }
+        let axis = match s.axis {
+            None => agent.joints[j].axis,
+            Some(a) => {
+                let v = Vector3::from(a);
+                if !v.norm().is_finite() || v.norm() <= 1e-9 {
+                    return Err(src.invalid(&sk.key("axis"), "must be a non-zero vector"));
+                }
+                Unit::new_normalize(v)
+            }
+        };
+        for (name, v) in [
+            ("theta1", s.theta1),
+            ("theta2", s.theta2),
+            ("thetad", s.thetad),
+        ] {
+            names.within_limit(&sk.key(name), j, &axis, v)?;
+        }
+        sweeps.push(Sweep {
+            joint: j,
+            theta1: s.theta1.to_radians(),
+            theta2: s.theta2.to_radians(),
+            thetad: s.thetad.to_radians(),
+            axis,
+        });
+    }
+    if sweeps.is_empty() {
+        return Err(src.invalid(&key.key("sweep"), "a node needs at least one joint sweep"));
+    }
+    let mut spreads: Vec<Spread> = Vec::new();
+    for (k, sp) in n.spread.iter().enumerate() {
+        let sk = key.key("spread").item(k, &sp.joint);
+        let j = names.joint(&sk.key("joint"), &sp.joint)?;
+        if sp.angles.is_empty() || sp.angles.iter().any(|a| !a.is_finite()) {
+            return Err(src.invalid(&sk.key("angles"), "needs finite angles"));
+        }
+        if sweeps.iter().any(|s| s.joint == j) {
+            return Err(src.invalid(
+                &sk.key("joint"),
+                format!("joint `{}` cannot be both swept and spread", sp.joint),
+            ));
+        }
+        if spreads.iter().any(|o| o.joint == j) {
+            return Err(src.invalid(
+                &sk.key("joint"),
+                format!("joint `{}` is spread twice", sp.joint),
+            ));
+        }
+        for &a in &sp.angles {
+            names.within_limit(&sk.key("angles"), j, &agent.joints[j].axis, a)?;
+        }
+        spreads.push(Spread {
+            joint: j,
+            angles: sp.angles.iter().map(|a| a.to_radians()).collect(),
+        });
+    }
+    let mut clamps = Vec::new();
+    for (k, c) in n.clamp.iter().enumerate() {
+        let ck = key.key("clamp").item(k, &c.joint);
+        let j = names.joint(&ck.key("joint"), &c.joint)?;
+        if !(c.lower.is_finite() && c.upper.is_finite()) || c.lower > c.upper {
+            return Err(src.invalid(
+                &ck.key("lower"),
+                format!("lower = {} must not exceed upper = {}", c.lower, c.upper),
+            ));
+        }
+        for (name, v) in [("lower", c.lower), ("upper", c.upper)] {
+            names.within_limit(&ck.key(name), j, &agent.joints[j].axis, v)?;
+        }
+        clamps.push(Clamp {
+            joint: j,
+            lower: c.lower.to_radians(),
+            upper: c.upper.to_radians(),
+        });
+    }
+    let release = match n.release.map(Vector3::from) {
+        Some(r) if !r.norm().is_finite() || r.norm() <= 1e-9 => {
+            return Err(src.invalid(&key.key("release"), "must be a non-zero direction"))
+        }
+        r => r,
+    };
+    Ok(Node {
+        id: n.id.clone(),
+        parent,
+        when: n.when,
+        links,
+        spans,
+        sweeps,
+        spreads,
+        clamps,
+        release,
+        free_start: n.free_start,
+        contact: n.contact,
+        support,
+        support_gap: n.support_gap,
+    })
+}
+
+/// Resolves a list of links, each with the span of it that counts, checking each once.
+fn spanned_links(
+    refs: &[LinkRef],
+    key: &Key,
+    names: &Names,
+) -> Result<Vec<(usize, [f64; 2])>, ModelError> {
+    let mut out: Vec<(usize, [f64; 2])> = Vec::new();
+    for (k, l) in refs.iter().enumerate() {
+        let at = key.at(k);
+        let (name, span) = match l {
+            LinkRef::Name(name) => (name, [0.0, 1.0]),
+            LinkRef::Span { link, span } => (link, *span),
+        };
+        let index = names.link(&at, name)?;
+        if !(0.0..=1.0).contains(&span[0]) || !(0.0..=1.0).contains(&span[1]) || span[0] >= span[1]
+        {
+            return Err(names.src.invalid(
+                &key.item(k, name).key("span"),
+                format!("needs 0 <= from < to <= 1, not {span:?}"),
+            ));
+        }
+        if out.iter().any(|(i, _)| *i == index) {
+            return Err(names
+                .src
+                .invalid(&at, format!("link `{name}` is listed twice")));
+        }
+        out.push((index, span));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::line_of;
+    use crate::model::set::{BUILTIN_AGENT, BUILTIN_SITTING};
+
+    fn agent() -> Agent {
+        Agent::from_toml(BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap()
+    }
+
+    fn load(text: &str) -> Result<Hierarchy, ModelError> {
+        Hierarchy::from_toml(text, Path::new("h.toml"), &agent())
+    }
+
+    #[test]
+    fn the_sitting_hierarchy_follows_fig_3() {
+        let h = load(BUILTIN_SITTING).unwrap();
+        let ids = h.ids();
+        assert_eq!(ids[0], "sitting");
+        let parent = |id: &str| {
+            let n = &h.nodes[ids.iter().position(|i| *i == id).unwrap()];
+            n.parent.map(|p| h.nodes[p].id.as_str())
+        };
+        assert_eq!(parent("backrest"), Some("sitting"));
+        assert_eq!(parent("armrest"), Some("sitting"));
+        assert_eq!(parent("headrest"), Some("backrest"));
+        assert!(h.nodes.iter().all(|n| n.when));
+        // Degrees in the file, radians here.
+        let knee = &h.nodes[0].sweeps[0];
+        assert!((knee.thetad - 85f64.to_radians()).abs() < 1e-12);
+        assert!(
+            (h.initial.angles[agent().joint_index("hip_l").unwrap()] - 90f64.to_radians()).abs()
+                < 1e-12
+        );
+    }
+
+    /// The error loading `text` as `h.toml`.
+    fn error(text: &str) -> String {
+        load(text).unwrap_err().to_string()
+    }
+
+    /// The error of the built-in hierarchy with `from` replaced by `to` (once, checked),
+    /// and the line where `to` now stands.
+    fn edited(from: &str, to: &str) -> (String, usize) {
+        assert_eq!(
+            BUILTIN_SITTING.matches(from).count(),
+            1,
+            "`{from}` is not unique"
+        );
+        let bad = BUILTIN_SITTING.replace(from, to);
+        let line = line_of(&bad, to.lines().last().unwrap_or(to), 0);
+        (error(&bad), line)
+    }
+
+    /// Asserts that `e` starts with `h.toml:LINE: KEY: ` and mentions `what`.
+    fn names(e: &str, line: usize, key: &str, what: &str) {
+        assert!(
+            e.starts_with(&format!("h.toml:{line}: {key}: ")) && e.contains(what),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_legend_comes_from_the_file_or_the_node_palette() {
+        let h = load(BUILTIN_SITTING).unwrap();
+        let ids: Vec<&str> = h.legend.iter().map(|(id, _)| id.as_str()).collect();
+        // As listed in the file (armrest after backrest: drawn over it), not node order.
+        assert_eq!(ids, ["sitting", "backrest", "armrest", "headrest"]);
+        assert_eq!(h.legend[0].1, [255, 140, 0]);
+        // Without a legend every node gets a palette colour, in node order.
+        let start = BUILTIN_SITTING.find("legend = [").unwrap();
+        let end = start + BUILTIN_SITTING[start..].find("]\n\n").unwrap() + 2;
+        let bare = format!("{}{}", &BUILTIN_SITTING[..start], &BUILTIN_SITTING[end..]);
+        let h = load(&bare).unwrap();
+        let want: Vec<(String, [u8; 3])> = h
+            .ids()
+            .iter()
+            .zip(NODE_PALETTE)
+            .map(|(id, c)| (id.to_string(), c))
+            .collect();
+        assert_eq!(h.legend, want);
+    }
+
+    #[test]
+    fn a_legend_entry_names_a_node_once_with_bytes() {
+        let (e, line) = edited(
+            r#"{ id = "headrest", colour = [120, 230, 40] }"#,
+            r#"{ id = "footrest", colour = [120, 230, 40] }"#,
+        );
+        names(&e, line, "legend.footrest.id", "not the id of a node");
+        let (e, line) = edited(
+            r#"{ id = "headrest", colour = [120, 230, 40] }"#,
+            r#"{ id = "sitting", colour = [120, 230, 40] }"#,
+        );
+        names(&e, line, "legend.sitting.id", "listed twice");
+        let (e, _) = edited(
+            r#"{ id = "headrest", colour = [120, 230, 40] }"#,
+            r#"{ id = "headrest", colour = [120, 230, 400] }"#,
+        );
+        assert!(e.starts_with("h.toml:") && e.contains("legend"), "{e}");
+    }
+
+    #[test]
+    fn every_built_in_sweep_turns_about_its_joints_own_axis() {
+        // One sign convention: a hip flexed 90 deg is +90 in sitting and in lying alike.
+        let a = agent();
+        for (name, text) in crate::model::set::BUILTIN_HIERARCHIES {
+            let h = Hierarchy::from_toml(text, Path::new(name), &a).unwrap();
+            for n in &h.nodes {
+                for s in &n.sweeps {
+                    assert_eq!(s.axis, a.joints[s.joint].axis, "{name} {}", n.id);
+                }
+            }
+        }
+        let lying = crate::model::set::BUILTIN_HIERARCHIES[1].1;
+        let h = Hierarchy::from_toml(lying, Path::new("lying.toml"), &a).unwrap();
+        let hip = a.joint_index("hip_l").unwrap();
+        let s = h.nodes[0].sweeps.iter().find(|s| s.joint == hip).unwrap();
+        assert_eq!(s.thetad.to_degrees().round(), 90.0);
+    }
+
+    #[test]
+    fn a_sweep_may_run_downwards() {
+        let a = agent();
+        let text =
+            BUILTIN_SITTING.replace("theta1 = 0.0, theta2 = 30.0", "theta1 = 30.0, theta2 = 0.0");
+        let h = Hierarchy::from_toml(&text, Path::new("h.toml"), &a).unwrap();
+        let s = &h.nodes.iter().find(|n| n.id == "headrest").unwrap().sweeps[0];
+        assert!(s.theta1 > s.theta2);
+    }
+
+    #[test]
+    fn angles_beyond_a_joint_limit_are_named_with_value_and_limit() {
+        // The neck extends to 60 deg (agents/human.toml).
+        let (e, line) = edited("theta1 = 0.0, theta2 = 30.0", "theta1 = 0.0, theta2 = 90.0");
+        names(
+            &e,
+            line,
+            "node.headrest.sweep.neck.theta2",
+            "joint `neck` at 90 deg is outside its limit -45.0 to 60.0 deg (agent `human`)",
+        );
+        // The knee flexes from 0 to 150 deg.
+        let (e, line) = edited("knee_l = 90.0", "knee_l = -10.0");
+        names(
+            &e,
+            line,
+            "initial_pose.knee_l",
+            "joint `knee_l` at -10 deg is outside its limit",
+        );
+    }
+
+    #[test]
+    fn a_missing_parent_node_is_named() {
+        let (e, line) = edited("parent = \"backrest\"", "parent = \"back\"");
+        names(&e, line, "node.headrest.parent", "missing node `back`");
+    }
+
+    #[test]
+    fn a_cycle_of_nodes_is_named() {
+        let (e, line) = edited(
+            "id = \"backrest\"\nparent = \"sitting\"",
+            "id = \"backrest\"\nparent = \"headrest\"",
+        );
+        names(&e, line, "node.backrest.parent", "cycle");
+        assert!(e.contains("backrest -> headrest -> backrest"), "{e}");
+    }
+
+    #[test]
+    fn a_duplicate_node_id_is_named_where_repeated() {
+        // The node's line (at the start of a line), not the legend's entry.
+        let bad = BUILTIN_SITTING.replace("\nid = \"armrest\"", "\nid = \"backrest\"");
+        names(
+            &error(&bad),
+            // The legend's entry, the backrest node, then the repeat.
+            line_of(&bad, "id = \"backrest\"", 2),
+            "node.backrest.id",
+            "duplicate node id",
+        );
+    }
+
+    #[test]
+    fn an_initial_pose_of_an_unknown_joint_is_named() {
+        let (e, line) = edited("knee_r = 90.0", "kne_r = 90.0");
+        names(&e, line, "initial_pose.kne_r", "unknown joint `kne_r`");
+    }
+
+    #[test]
+    fn an_unknown_link_is_named() {
+        let (e, line) = edited("links = [\"torso\"]", "links = [\"trunk\"]");
+        names(&e, line, "node.backrest.links", "unknown link `trunk`");
+        let (e, line) = edited(
+            "stability_links = [\"pelvis\"]",
+            "stability_links = [\"hips\"]",
+        );
+        names(&e, line, "fit.stability_links", "unknown link `hips`");
+    }
+
+    #[test]
+    fn a_sweep_that_moves_no_checked_link_is_named() {
+        let (e, line) = edited(
+            "sweep = [{ joint = \"lumbar\", theta1",
+            "sweep = [{ joint = \"neck\", theta1",
+        );
+        names(&e, line, "node.backrest.sweep.neck.joint", "moves none");
+    }
+
+    #[test]
+    fn a_number_out_of_range_is_named() {
+        let (e, line) = edited("sigma_d = 0.03", "sigma_d = -0.03");
+        names(&e, line, "fit.sigma_d", "must be positive");
+        let (e, line) = edited(
+            "height = [0.14, 0.21, 0.28, 0.33]",
+            "height = [0.14, 0.28, 0.21, 0.33]",
+        );
+        names(&e, line, "hypothesis.height", "increasing order");
+    }
+
+    #[test]
+    fn an_unknown_key_is_named_with_its_line() {
+        let (e, line) = edited("free_start = true", "free_starts = true");
+        names(
+            &e,
+            line,
+            "node.sitting.free_starts",
+            "unknown field `free_starts`",
+        );
+    }
+}
