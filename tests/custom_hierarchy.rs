@@ -224,7 +224,7 @@ fn the_examples_of_docs_models_md_load() {
             kinds.push("hierarchy");
         }
     }
-    assert_eq!(kinds, ["agent", "hierarchy"]);
+    assert_eq!(kinds, ["agent", "agent", "hierarchy"]);
 }
 
 /// The colour of the first vertex of the posed-agent mesh of `o`'s detections, drawn with

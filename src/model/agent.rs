@@ -122,6 +122,38 @@ struct AgentFile {
     joint: Vec<JointFile>,
 }
 
+/// An agent file that changes another body (`extends`): its joints name joints of that
+/// body and give only the keys that differ.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DerivedFile {
+    name: String,
+    extends: String,
+    #[serde(default)]
+    joint: Vec<JointChange>,
+}
+
+/// The keys of one joint of the extended body that a derived file changes.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JointChange {
+    name: String,
+    #[serde(default)]
+    origin: Option<[f64; 3]>,
+    #[serde(default)]
+    axis: Option<[f64; 3]>,
+    #[serde(default)]
+    limit: Option<LimitFile>,
+    #[serde(default)]
+    link: Option<LinkFile>,
+}
+
+/// The file's `extends`, if it has one (the text need not be a valid agent otherwise).
+fn extends_of(text: &str) -> Option<String> {
+    let table: toml::Table = toml::from_str(text).ok()?;
+    table.get("extends")?.as_str().map(String::from)
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct JointFile {
@@ -163,8 +195,75 @@ impl Agent {
 
     /// Parses agent TOML text (`path` only names the source in errors).
     pub fn from_toml(text: &str, path: &Path, height: f64) -> Result<Agent, ModelError> {
+        if extends_of(text).is_some() {
+            return Self::derived(text, path, height);
+        }
         let file: AgentFile = parse_toml(text, path)?;
         Self::from_file(file, Source { path, text }, height)
+    }
+
+    /// An agent file with `extends = "BODY"`: the body BODY (a built-in agent's name, or a
+    /// file relative to this one) with the joints this file lists changed, key by key
+    /// (`origin`, `axis`, `limit`, `link`): a child is the adult's tree with other lengths,
+    /// without a copy of what stays. The body extended may not itself extend another.
+    /// Problems of the file's own keys name their line; problems of the body that results
+    /// name the file and the key.
+    fn derived(text: &str, path: &Path, height: f64) -> Result<Agent, ModelError> {
+        let src = Source { path, text };
+        let file: DerivedFile = parse_toml(text, path)?;
+        let extends = Key::top("extends");
+        let builtin = crate::model::set::BUILTIN_AGENTS
+            .iter()
+            .find(|(n, _)| *n == file.extends);
+        let (base_path, base_text) = match builtin {
+            Some((n, t)) => (
+                std::path::PathBuf::from(format!("(built-in) agents/{n}.toml")),
+                t.to_string(),
+            ),
+            None => {
+                let p = path.parent().unwrap_or(Path::new("")).join(&file.extends);
+                let t = read_text(&p).map_err(|e| {
+                    src.invalid(
+                        &extends,
+                        format!(
+                            "`{}` is neither a built-in agent nor a readable file: {e}",
+                            file.extends
+                        ),
+                    )
+                })?;
+                (p, t)
+            }
+        };
+        if extends_of(&base_text).is_some() {
+            return Err(src.invalid(
+                &extends,
+                format!("`{}` extends another body itself", file.extends),
+            ));
+        }
+        let mut base: AgentFile = parse_toml(&base_text, &base_path)?;
+        for (i, change) in file.joint.into_iter().enumerate() {
+            let Some(j) = base.joint.iter_mut().find(|j| j.name == change.name) else {
+                return Err(src.invalid(
+                    &Key::top("joint").item(i, &change.name).key("name"),
+                    format!("`{}` has no joint `{}`", file.extends, change.name),
+                ));
+            };
+            if let Some(o) = change.origin {
+                j.origin = o;
+            }
+            if change.axis.is_some() {
+                j.axis = change.axis;
+            }
+            if change.limit.is_some() {
+                j.limit = change.limit;
+            }
+            if change.link.is_some() {
+                j.link = change.link;
+            }
+        }
+        base.name = file.name;
+        // The body is checked whole; its keys are not all in this file, so no line.
+        Self::from_file(base, Source { path, text: "" }, height)
     }
 
     fn from_file(file: AgentFile, src: Source, height: f64) -> Result<Agent, ModelError> {
@@ -432,6 +531,98 @@ link = { name = "shank", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius 
 
     fn leg(h: f64) -> Agent {
         Agent::from_toml(TWO_LINKS, Path::new("leg.toml"), h).unwrap()
+    }
+
+    /// The built-in agent `name`'s text.
+    fn builtin(name: &str) -> &'static str {
+        crate::model::set::BUILTIN_AGENTS
+            .iter()
+            .find(|(n, _)| *n == name)
+            .unwrap()
+            .1
+    }
+
+    #[test]
+    fn a_derived_body_is_the_extended_one_with_the_listed_keys_changed() {
+        let adult = Agent::from_toml(builtin("human"), Path::new("human.toml"), 1.0).unwrap();
+        let child = Agent::from_toml(builtin("child"), Path::new("child.toml"), 1.0).unwrap();
+        assert_eq!(child.name, "child");
+        assert_eq!(child.joints.len(), adult.joints.len());
+        let forearm = |a: &Agent| {
+            let j = &a.joints[a.joint_index("elbow_l").unwrap()];
+            let l = j.link.as_ref().unwrap();
+            (l.to - l.from).norm()
+        };
+        assert!((forearm(&child) - 0.140).abs() < 1e-12);
+        assert!((forearm(&adult) - 0.146).abs() < 1e-12);
+        // What the child file leaves out is the adult's: names, parents, axes, limits, the
+        // feet and the pelvis.
+        for (c, a) in child.joints.iter().zip(&adult.joints) {
+            assert_eq!(
+                (&c.name, c.parent, c.axis, c.kind),
+                (&a.name, a.parent, a.axis, a.kind)
+            );
+            assert_eq!(c.limit, a.limit, "{}", c.name);
+        }
+        for name in ["pelvis", "ankle_l", "ankle_r"] {
+            let (c, a) = (
+                child.joint_index(name).unwrap(),
+                adult.joint_index(name).unwrap(),
+            );
+            assert_eq!(child.joints[c].link, adult.joints[a].link, "{name}");
+        }
+    }
+
+    #[test]
+    fn a_derived_body_may_extend_a_file_beside_it() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("leg.toml"), TWO_LINKS).unwrap();
+        let long = "name = \"long leg\"\nextends = \"leg.toml\"\n[[joint]]\nname = \"knee\"\n\
+                    origin = [0.0, 0.0, -0.30]\n";
+        let path = dir.path().join("long.toml");
+        let a = Agent::from_toml(long, &path, 1.0).unwrap();
+        assert_eq!(a.name, "long leg");
+        assert_eq!(a.joints[1].origin, Vector3::new(0.0, 0.0, -0.30));
+        assert_eq!(a.joints[1].link, leg(1.0).joints[1].link);
+        // A body that is not there, a joint the body does not have, a key a change may not
+        // touch, a chain of extensions: one line each, naming file, line and key.
+        let missing = long.replace("leg.toml", "nowhere.toml");
+        let e = Agent::from_toml(&missing, &path, 1.0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("long.toml:2: extends: `nowhere.toml` is neither"),
+            "{e}"
+        );
+        let ankle = long.replace("name = \"knee\"", "name = \"ankle\"");
+        let e = Agent::from_toml(&ankle, &path, 1.0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("long.toml:4: joint.ankle.name: `leg.toml` has no joint `ankle`"),
+            "{e}"
+        );
+        let parent = format!("{long}parent = \"hip\"\n");
+        let e = Agent::from_toml(&parent, &path, 1.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("long.toml:6") && e.contains("parent"), "{e}");
+        std::fs::write(dir.path().join("long.toml"), long).unwrap();
+        let longer = long
+            .replace("leg.toml", "long.toml")
+            .replace("long leg", "longer");
+        let e = Agent::from_toml(&longer, &dir.path().join("longer.toml"), 1.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("extends another body itself"), "{e}");
+        // The body that results is checked whole: a limit the initial pose breaks is named
+        // by file and key.
+        let bad = format!("{long}limit = {{ lower = 10.0, upper = -10.0 }}\n");
+        let e = Agent::from_toml(&bad, &path, 1.0).unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!("{}: joint.knee", path.display())),
+            "{e}"
+        );
     }
 
     #[test]
