@@ -586,26 +586,21 @@ link = { name = "shank", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius 
         assert_eq!(a.joints[1].link, leg(1.0).joints[1].link);
         // A body that is not there, a joint the body does not have, a key a change may not
         // touch, a chain of extensions: one line each, naming file, line and key.
+        let err = |text: &str| Agent::from_toml(text, &path, 1.0).unwrap_err().to_string();
         let missing = long.replace("leg.toml", "nowhere.toml");
-        let e = Agent::from_toml(&missing, &path, 1.0)
-            .unwrap_err()
-            .to_string();
+        let e = err(&missing);
         assert!(
             e.contains("long.toml:2: extends: `nowhere.toml` is neither"),
             "{e}"
         );
         let ankle = long.replace("name = \"knee\"", "name = \"ankle\"");
-        let e = Agent::from_toml(&ankle, &path, 1.0)
-            .unwrap_err()
-            .to_string();
+        let e = err(&ankle);
         assert!(
             e.contains("long.toml:4: joint.ankle.name: `leg.toml` has no joint `ankle`"),
             "{e}"
         );
         let parent = format!("{long}parent = \"hip\"\n");
-        let e = Agent::from_toml(&parent, &path, 1.0)
-            .unwrap_err()
-            .to_string();
+        let e = err(&parent);
         assert!(e.contains("long.toml:6") && e.contains("parent"), "{e}");
         std::fs::write(dir.path().join("long.toml"), long).unwrap();
         let longer = long
@@ -618,7 +613,7 @@ link = { name = "shank", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius 
         // The body that results is checked whole: a limit the initial pose breaks is named
         // by file and key.
         let bad = format!("{long}limit = {{ lower = 10.0, upper = -10.0 }}\n");
-        let e = Agent::from_toml(&bad, &path, 1.0).unwrap_err().to_string();
+        let e = err(&bad);
         assert!(
             e.starts_with(&format!("{}: joint.knee", path.display())),
             "{e}"
