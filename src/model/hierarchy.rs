@@ -234,15 +234,21 @@ pub const NODE_PALETTE: [[u8; 3]; 8] = [
     [170, 110, 60],
 ];
 
+/// A hierarchy file; `F` and `S` are its `[fit]` and `[score]` tables, complete
+/// ([`FitFile`], [`ScoreFile`]) or, in a file that shares them, as written (`toml::Table`).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct File {
+struct File<F = FitFile, S = ScoreFile> {
     name: String,
     orientation: Orientation,
     suppression_radius: f64,
+    /// A hierarchy (built-in name or file beside this one) whose `[fit]` and `[score]`
+    /// values this file takes where it gives none.
+    #[serde(default)]
+    shares: Option<String>,
     hypothesis: HypothesisRule,
-    fit: FitFile,
-    score: ScoreFile,
+    fit: F,
+    score: S,
     initial_pose: BTreeMap<String, f64>,
     node: Vec<NodeFile>,
     #[serde(default)]
@@ -357,8 +363,16 @@ impl Hierarchy {
 
     /// Parses hierarchy TOML text (`path` only names the source in errors).
     pub fn from_toml(text: &str, path: &Path, agent: &Agent) -> Result<Hierarchy, ModelError> {
-        let file: File = parse_toml(text, path)?;
-        Self::resolve(file, Source { path, text }, agent)
+        let src = Source { path, text };
+        let raw: File<toml::Table, toml::Table> = parse_toml(text, path)?;
+        let file: File = match &raw.shares {
+            None => parse_toml(text, path)?,
+            Some(other) => {
+                let other = other.clone();
+                shared(&other, raw, src)?
+            }
+        };
+        Self::resolve(file, src, agent)
     }
 
     fn resolve(file: File, src: Source, agent: &Agent) -> Result<Hierarchy, ModelError> {
@@ -440,6 +454,70 @@ impl Hierarchy {
     pub fn ids(&self) -> Vec<&str> {
         self.nodes.iter().map(|n| n.id.as_str()).collect()
     }
+}
+
+/// The file `raw`, whose `shares = "OTHER"`, with the `[fit]` and `[score]` values it
+/// leaves out taken from the hierarchy OTHER (a built-in name, or a file beside it, which
+/// may not share another's itself): values the hierarchies have in common (the scores'
+/// widths, the fit's stability rule) stand in one file, with their reasons. Keys of `raw`
+/// keep their lines in errors; a problem of the tables that result names the table.
+fn shared(
+    other: &str,
+    raw: File<toml::Table, toml::Table>,
+    src: Source,
+) -> Result<File, ModelError> {
+    let key = Key::top("shares");
+    let builtin = crate::model::set::BUILTIN_HIERARCHIES
+        .iter()
+        .find(|(n, _)| *n == other);
+    let (base_path, base_text) = match builtin {
+        Some((n, t)) => (
+            std::path::PathBuf::from(format!("(built-in) affordances/{n}.toml")),
+            t.to_string(),
+        ),
+        None => {
+            let p = src.path.parent().unwrap_or(Path::new("")).join(other);
+            let t = read_text(&p).map_err(|e| {
+                src.invalid(
+                    &key,
+                    format!("`{other}` is neither a built-in hierarchy nor a readable file: {e}"),
+                )
+            })?;
+            (p, t)
+        }
+    };
+    let base: File<toml::Table, toml::Table> = parse_toml(&base_text, &base_path)?;
+    if base.shares.is_some() {
+        return Err(src.invalid(&key, format!("`{other}` shares another's values itself")));
+    }
+    fn merge<T: serde::de::DeserializeOwned>(
+        table: &str,
+        own: toml::Table,
+        theirs: toml::Table,
+        other: &str,
+        src: Source,
+    ) -> Result<T, ModelError> {
+        let mut all = theirs;
+        all.extend(own);
+        toml::Value::Table(all)
+            .try_into()
+            .map_err(|e: toml::de::Error| {
+                let what = format!("with `{other}`'s values: {}", e.message().trim());
+                src.invalid(&Key::top(table), what)
+            })
+    }
+    Ok(File {
+        name: raw.name,
+        orientation: raw.orientation,
+        suppression_radius: raw.suppression_radius,
+        shares: raw.shares,
+        hypothesis: raw.hypothesis,
+        fit: merge("fit", raw.fit, base.fit, other, src)?,
+        score: merge("score", raw.score, base.score, other, src)?,
+        initial_pose: raw.initial_pose,
+        node: raw.node,
+        legend: raw.legend,
+    })
 }
 
 /// The hierarchy's legend: the file's `legend` (every id a node's, none twice), or every
@@ -954,6 +1032,64 @@ mod tests {
             e.starts_with(&format!("h.toml:{line}: {key}: ")) && e.contains(what),
             "{e}"
         );
+    }
+
+    #[test]
+    fn lying_shares_sittings_fit_and_score_values_it_leaves_out() {
+        let sitting = load(BUILTIN_SITTING).unwrap();
+        let lying = load(crate::model::set::BUILTIN_LYING).unwrap();
+        let (f, g) = (&lying.fit, &sitting.fit);
+        assert_eq!(
+            (f.sigma_d, f.min_stability, f.stability_band, f.max_drop),
+            (g.sigma_d, g.min_stability, g.stability_band, g.max_drop)
+        );
+        assert_eq!(lying.score.sigma_theta, sitting.score.sigma_theta);
+        // Its own values stay its own, empty lists included.
+        assert_ne!(lying.fit.yaw_offsets, sitting.fit.yaw_offsets);
+        assert!((lying.score.support_cos - 60f64.to_radians().cos()).abs() < 1e-12);
+        assert!(lying.fit.deferred_links.is_empty() && !sitting.fit.deferred_links.is_empty());
+    }
+
+    #[test]
+    fn sharing_names_what_is_missing_or_wrong() {
+        let dir = tempfile::tempdir().unwrap();
+        let base = BUILTIN_SITTING.replace("sigma_d = 0.03", "");
+        std::fs::write(dir.path().join("base.toml"), &base).unwrap();
+        let own = BUILTIN_SITTING
+            .replace("sigma_d = 0.03 ", "# sigma_d from nowhere ")
+            .replace(
+                "suppression_radius = 0.25 ",
+                "shares = \"base.toml\"\nsuppression_radius = 0.25 ",
+            );
+        let path = dir.path().join("own.toml");
+        let err = |text: &str| {
+            Hierarchy::from_toml(text, &path, &agent())
+                .unwrap_err()
+                .to_string()
+        };
+        // Neither file gives sigma_d.
+        let e = err(&own);
+        assert!(
+            e.contains(": fit: with `base.toml`'s values") && e.contains("sigma_d"),
+            "{e}"
+        );
+        // Given here, it is found; a key of neither kind is refused.
+        let given = own.replace("# sigma_d from nowhere ", "sigma_d = 0.03 ");
+        assert!(Hierarchy::from_toml(&given, &path, &agent()).is_ok());
+        let unknown = given.replace("sigma_d = 0.03 ", "sigma_dd = 0.03 ");
+        assert!(err(&unknown).contains("sigma_dd"), "{}", err(&unknown));
+        // No such hierarchy; one that shares another's itself.
+        let line = line_of(&own, "shares", 0);
+        let e = err(&own.replace("base.toml", "nowhere.toml"));
+        assert!(
+            e.contains(&format!(
+                "own.toml:{line}: shares: `nowhere.toml` is neither"
+            )),
+            "{e}"
+        );
+        std::fs::write(dir.path().join("base.toml"), &given).unwrap();
+        let e = err(&own.replace("# sigma_d from nowhere ", "sigma_d = 0.03 "));
+        assert!(e.contains("shares another's values itself"), "{e}");
     }
 
     #[test]
