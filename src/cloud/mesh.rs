@@ -70,6 +70,7 @@ pub fn read_ply_mesh(path: &Path) -> Result<Mesh, CloudError> {
     check_ply_counts(&bytes, path)?;
     read_mesh_ply(path).map_err(|e| match e {
         MeshError::Io { path, source } => CloudError::Io { path, source },
+        MeshError::Header(e) => e,
         MeshError::Format { path, what } => CloudError::Body {
             path,
             at: "PLY body".into(),
@@ -586,33 +587,20 @@ fn parse_stl_ascii(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
 /// takes at least one byte), so that a lying header cannot make the reader loop or
 /// allocate for long.
 fn check_ply_counts(bytes: &[u8], path: &Path) -> Result<(), CloudError> {
-    let head = &bytes[..bytes.len().min(1 << 16)];
-    let end = head
-        .windows(10)
-        .position(|w| w == b"end_header")
-        .unwrap_or(head.len());
-    let header = String::from_utf8_lossy(&head[..end]);
-    if !header.starts_with("ply") {
-        return Err(header_err(
-            path,
-            "line 1".into(),
-            "not a PLY file (no 'ply' magic)".into(),
-        ));
-    }
-    for (i, line) in header.lines().enumerate() {
-        let toks: Vec<&str> = line.split_ascii_whitespace().collect();
-        if let ["element", name, count] = toks.as_slice() {
-            let fits = count.parse::<u64>().is_ok_and(|c| c <= bytes.len() as u64);
-            if !fits {
-                return Err(header_err(
-                    path,
-                    format!("line {}", i + 1),
-                    format!(
-                        "element '{name}' count '{count}' cannot fit in a file of {} bytes",
-                        bytes.len()
-                    ),
-                ));
-            }
+    let mut r = bytes;
+    let header = super::parse_header(path, &mut r)?;
+    for e in &header.elements {
+        if e.count > bytes.len() as u64 {
+            return Err(header_err(
+                path,
+                format!("line {}", e.line),
+                format!(
+                    "element '{}' count '{}' cannot fit in a file of {} bytes",
+                    e.name,
+                    e.count,
+                    bytes.len()
+                ),
+            ));
         }
     }
     Ok(())

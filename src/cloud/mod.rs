@@ -25,8 +25,8 @@ pub use frame::{
 };
 pub use mesh::{expected_samples, read_mesh, sample_mesh, MAX_SAMPLES};
 pub use pcd::{read_pcd, write_pcd};
+pub(crate) use ply::{parse_header, write_ply_typed, Encoding, Kind, Scalar};
 pub use ply::{read_ply, read_ply_property, write_ply_points};
-pub(crate) use ply::{write_ply_typed, Scalar};
 pub use source::{read_parts, Intrinsics, Part, Pick, SourceOptions};
 pub use spacing::point_spacing;
 pub use xyz::read_xyz;

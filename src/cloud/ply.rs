@@ -196,24 +196,26 @@ impl Scalar {
 
 /// A property of an element: a scalar, or a list (count type, item type).
 #[derive(Debug, Clone, PartialEq, Eq)]
-enum Kind {
+pub(crate) enum Kind {
     Scalar(Scalar),
     List(Scalar, Scalar),
 }
 
+/// A property of a PLY element: its name and type.
 #[derive(Debug, Clone)]
-struct Prop {
-    name: String,
-    kind: Kind,
+pub(crate) struct Prop {
+    pub(crate) name: String,
+    pub(crate) kind: Kind,
 }
 
+/// An element of a PLY header: its name, row count and properties.
 #[derive(Debug, Clone)]
-struct Element {
-    name: String,
-    count: u64,
-    props: Vec<Prop>,
+pub(crate) struct Element {
+    pub(crate) name: String,
+    pub(crate) count: u64,
+    pub(crate) props: Vec<Prop>,
     /// Header line of the `element` keyword.
-    line: usize,
+    pub(crate) line: usize,
 }
 
 impl Element {
@@ -235,19 +237,21 @@ impl Element {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Encoding {
+pub(crate) enum Encoding {
     Ascii,
     BinaryLe,
     BinaryBe,
 }
 
-struct Header {
-    encoding: Encoding,
-    elements: Vec<Element>,
+/// A parsed PLY header: the one parser of PLY headers, for point clouds
+/// ([`read_ply`]) and meshes ([`crate::mesh::ply::read_mesh_ply`]).
+pub(crate) struct Header {
+    pub(crate) encoding: Encoding,
+    pub(crate) elements: Vec<Element>,
     /// Bytes taken by the header, up to and including the `end_header` line.
-    len: u64,
+    pub(crate) len: u64,
     /// Lines taken by the header.
-    lines: usize,
+    pub(crate) lines: usize,
 }
 
 /// Reads header line `lineno` (1-based) of a PLY or PCD file: at most [`MAX_HEADER_LINE`]
@@ -277,7 +281,9 @@ pub(super) fn next_header_line<R: BufRead>(
     String::from_utf8(bytes).map_err(|_| header_err(path, at, not_text))
 }
 
-fn parse_header<R: BufRead>(path: &Path, r: &mut R) -> Result<Header, CloudError> {
+/// Parses a PLY header from `r`, leaving `r` at the first byte of the body; errors name
+/// the header line.
+pub(crate) fn parse_header<R: BufRead>(path: &Path, r: &mut R) -> Result<Header, CloudError> {
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
     let mut len = 0u64;

@@ -6,7 +6,7 @@
 //! more than three corners are split into a triangle fan. Units are taken as they are
 //! (the real models are metres, z up).
 
-use crate::cloud::Scalar;
+use crate::cloud::{parse_header, CloudError, Encoding, Kind};
 use std::path::{Path, PathBuf};
 
 use nalgebra::Point3;
@@ -25,7 +25,11 @@ pub enum MeshError {
         #[source]
         source: std::io::Error,
     },
-    /// The file is not a mesh PLY this reader understands.
+    /// The header is malformed (the PLY header parser of the point readers, which names
+    /// the line).
+    #[error(transparent)]
+    Header(#[from] CloudError),
+    /// The body is not a mesh this reader understands.
     #[error("{path}: {what}")]
     Format {
         /// The file.
@@ -35,20 +39,8 @@ pub enum MeshError {
     },
 }
 
-struct Prop {
-    name: String,
-    /// `Some(count type)` for a list.
-    list: Option<Scalar>,
-    ty: Scalar,
-}
-
-struct Elem {
-    name: String,
-    count: usize,
-    props: Vec<Prop>,
-}
-
 /// Reads a triangle mesh from a PLY file; every triangle is labelled [`Part::Other`].
+/// The header is read by the same parser as point clouds' ([`crate::cloud::read_ply`]).
 pub fn read_mesh_ply(path: &Path) -> Result<Mesh, MeshError> {
     let bytes = std::fs::read(path).map_err(|source| MeshError::Io {
         path: path.to_path_buf(),
@@ -58,142 +50,67 @@ pub fn read_mesh_ply(path: &Path) -> Result<Mesh, MeshError> {
         path: path.to_path_buf(),
         what,
     };
-    let end = b"end_header";
-    let hpos = bytes
-        .windows(end.len())
-        .position(|w| w == end)
-        .ok_or_else(|| err("no end_header".into()))?;
-    let mut body = hpos + end.len();
-    while body < bytes.len() && bytes[body] != b'\n' {
-        body += 1;
-    }
-    body += 1;
-    let header = String::from_utf8_lossy(&bytes[..hpos]);
-    let mut format = "";
-    let mut elems: Vec<Elem> = Vec::new();
-    for line in header.lines() {
-        let t: Vec<&str> = line.split_ascii_whitespace().collect();
-        match t.as_slice() {
-            ["format", f, ..] => format = f,
-            ["element", name, count] => elems.push(Elem {
-                name: name.to_string(),
-                count: count
-                    .parse()
-                    .map_err(|_| err(format!("bad element count '{count}'")))?,
-                props: Vec::new(),
-            }),
-            ["property", "list", c, i, name] => {
-                let (Some(c), Some(i)) = (Scalar::parse(c), Scalar::parse(i)) else {
-                    return Err(err(format!("bad list property '{line}'")));
-                };
-                let e = elems
-                    .last_mut()
-                    .ok_or_else(|| err("property before element".into()))?;
-                e.props.push(Prop {
-                    name: name.to_string(),
-                    list: Some(c),
-                    ty: i,
-                });
-            }
-            ["property", ty, name] => {
-                let ty = Scalar::parse(ty).ok_or_else(|| err(format!("bad property '{line}'")))?;
-                let e = elems
-                    .last_mut()
-                    .ok_or_else(|| err("property before element".into()))?;
-                e.props.push(Prop {
-                    name: name.to_string(),
-                    list: None,
-                    ty,
-                });
-            }
-            _ => {}
-        }
-    }
-    let data = &bytes[body.min(bytes.len())..];
+    let mut r: &[u8] = &bytes;
+    let header = parse_header(path, &mut r)?;
+    let data = r;
     let mut mesh = Mesh::new();
     let mut vertices: Vec<Point3<f64>> = Vec::new();
     let mut faces: Vec<Vec<usize>> = Vec::new();
     let short = || err("file too short for its header".into());
-    match format {
-        "binary_little_endian" | "binary_big_endian" => {
-            let big = format == "binary_big_endian";
-            let mut pos = 0usize;
-            let mut take = |n: usize| -> Result<&[u8], MeshError> {
-                let s = data.get(pos..pos + n).ok_or_else(short)?;
-                pos += n;
-                Ok(s)
-            };
-            for e in &elems {
-                for _ in 0..e.count {
-                    let mut xyz = [0.0; 3];
-                    let mut face = Vec::new();
-                    for p in &e.props {
-                        if let Some(ct) = p.list {
-                            let n = ct.decode(take(ct.size())?, big);
-                            if !(0.0..=1e6).contains(&n) {
-                                return Err(err(format!("bad list length {n}")));
-                            }
-                            for _ in 0..n as usize {
-                                let v = p.ty.decode(take(p.ty.size())?, big);
-                                if e.name == "face" {
-                                    face.push(v as usize);
-                                }
-                            }
-                        } else {
-                            let v = p.ty.decode(take(p.ty.size())?, big);
-                            if let Some(k) = ["x", "y", "z"].iter().position(|n| *n == p.name) {
-                                xyz[k] = v;
-                            }
-                        }
-                    }
-                    match e.name.as_str() {
-                        "vertex" => vertices.push(Point3::from(xyz)),
-                        "face" => faces.push(face),
-                        _ => {}
-                    }
-                }
-            }
-        }
-        "ascii" => {
-            let text = String::from_utf8_lossy(data);
-            let mut toks = text.split_ascii_whitespace();
-            let mut next = || -> Result<f64, MeshError> {
-                let t = toks.next().ok_or_else(short)?;
+    let ascii_text;
+    let mut toks = None;
+    let (mut pos, big) = (0usize, header.encoding == Encoding::BinaryBe);
+    if header.encoding == Encoding::Ascii {
+        ascii_text = String::from_utf8_lossy(data);
+        toks = Some(ascii_text.split_ascii_whitespace());
+    }
+    // The next value of the body, as the scalar type `ty` (binary) or a number (ascii).
+    let mut next = |ty: crate::cloud::Scalar| -> Result<f64, MeshError> {
+        match toks.as_mut() {
+            Some(t) => {
+                let t = t.next().ok_or_else(short)?;
                 t.parse::<f64>()
                     .map_err(|_| err(format!("'{t}' is not a number")))
-            };
-            for e in &elems {
-                for _ in 0..e.count {
-                    let mut xyz = [0.0; 3];
-                    let mut face = Vec::new();
-                    for p in &e.props {
-                        if p.list.is_some() {
-                            let n = next()?;
-                            if !(0.0..=1e6).contains(&n) {
-                                return Err(err(format!("bad list length {n}")));
-                            }
-                            for _ in 0..n as usize {
-                                let v = next()?;
-                                if e.name == "face" {
-                                    face.push(v as usize);
-                                }
-                            }
-                        } else {
-                            let v = next()?;
-                            if let Some(k) = ["x", "y", "z"].iter().position(|n| *n == p.name) {
-                                xyz[k] = v;
+            }
+            None => {
+                let s = data.get(pos..pos + ty.size()).ok_or_else(short)?;
+                pos += ty.size();
+                Ok(ty.decode(s, big))
+            }
+        }
+    };
+    for e in &header.elements {
+        for _ in 0..e.count {
+            let mut xyz = [0.0; 3];
+            let mut face = Vec::new();
+            for p in &e.props {
+                match p.kind {
+                    Kind::List(count, item) => {
+                        let n = next(count)?;
+                        if !(0.0..=1e6).contains(&n) {
+                            return Err(err(format!("bad list length {n}")));
+                        }
+                        for _ in 0..n as usize {
+                            let v = next(item)?;
+                            if e.name == "face" {
+                                face.push(v as usize);
                             }
                         }
                     }
-                    match e.name.as_str() {
-                        "vertex" => vertices.push(Point3::from(xyz)),
-                        "face" => faces.push(face),
-                        _ => {}
+                    Kind::Scalar(ty) => {
+                        let v = next(ty)?;
+                        if let Some(k) = ["x", "y", "z"].iter().position(|n| *n == p.name) {
+                            xyz[k] = v;
+                        }
                     }
                 }
             }
+            match e.name.as_str() {
+                "vertex" => vertices.push(Point3::from(xyz)),
+                "face" => faces.push(face),
+                _ => {}
+            }
         }
-        other => return Err(err(format!("unknown format '{other}'"))),
     }
     if vertices.is_empty() || faces.is_empty() {
         return Err(err("no vertices or no faces".into()));
@@ -252,5 +169,16 @@ mod tests {
         // Truncated: an error, not a panic.
         std::fs::write(&p, &b[..b.len() - 3]).unwrap();
         assert!(read_mesh_ply(&p).is_err());
+    }
+
+    #[test]
+    fn the_header_is_read_by_the_point_readers_parser_which_names_the_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bad.ply");
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty flot x\nend_header\n";
+        std::fs::write(&p, text).unwrap();
+        let e = read_mesh_ply(&p).unwrap_err();
+        assert!(matches!(e, MeshError::Header(_)), "{e}");
+        assert!(e.to_string().contains("line 4"), "{e}");
     }
 }
