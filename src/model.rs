@@ -80,11 +80,34 @@ fn at(path: &Path, line: usize) -> String {
     }
 }
 
-/// Reads a model file as text.
+/// The largest model file read, bytes: the built-in ones are under 20 KB, and a device or
+/// a mistaken path (`/dev/zero`, a point cloud) must not be read into memory without end.
+pub const MAX_MODEL_BYTES: u64 = 1 << 20;
+
+/// Reads a model file as text (at most [`MAX_MODEL_BYTES`]).
 pub fn read_text(path: &Path) -> Result<String, ModelError> {
-    std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+    use std::io::Read;
+    let io = |source| ModelError::Io {
         path: path.to_path_buf(),
         source,
+    };
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .map_err(io)?
+        .take(MAX_MODEL_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 > MAX_MODEL_BYTES {
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("more than {MAX_MODEL_BYTES} bytes: not a model file"),
+        )));
+    }
+    String::from_utf8(bytes).map_err(|_| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "not UTF-8 text: not a model file",
+        ))
     })
 }
 
@@ -432,6 +455,27 @@ pub(crate) fn line_of(text: &str, needle: &str, nth: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_model_file_is_read_up_to_a_size_and_as_text() {
+        let dir = tempfile::tempdir().unwrap();
+        let big = dir.path().join("big.toml");
+        std::fs::write(&big, vec![b'#'; MAX_MODEL_BYTES as usize + 1]).unwrap();
+        let e = read_text(&big).unwrap_err().to_string();
+        assert!(e.contains("big.toml: cannot read: more than"), "{e}");
+        let bin = dir.path().join("bin.toml");
+        std::fs::write(&bin, [0xff, 0xfe, 0x00]).unwrap();
+        assert!(read_text(&bin)
+            .unwrap_err()
+            .to_string()
+            .contains("not UTF-8"));
+        std::fs::write(&bin, "name = \"x\"\n").unwrap();
+        assert_eq!(read_text(&bin).unwrap(), "name = \"x\"\n");
+        // A device that never ends is refused, not read without end.
+        if Path::new("/dev/zero").exists() {
+            assert!(read_text(Path::new("/dev/zero")).is_err());
+        }
+    }
 
     #[test]
     fn topological_order_keeps_file_order_and_finds_cycles() {
