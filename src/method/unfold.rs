@@ -522,7 +522,10 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         let lying = crate::model::set::BUILTIN_LYING;
         let head = &lying[..lying.find("[initial_pose]").unwrap()];
         // Without lying's legend (its ids are not this file's nodes).
-        let (a, b) = (head.find("legend = [").unwrap(), head.find("]\n\n[").unwrap());
+        let (a, b) = (
+            head.find("legend = [").unwrap(),
+            head.find("]\n\n[").unwrap(),
+        );
         let head = format!("{}{}", &head[..a], &head[b + 2..]);
         let text = format!(
             "{head}\n[initial_pose]\n\n[[node]]\nid = \"leg\"\nlinks = [\"leg\"]\n\
