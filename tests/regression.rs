@@ -3,7 +3,7 @@
 //! affordance at any body height. Regenerate the baseline after a deliberate change with
 //! `afford eval data/regression/labels.csv --heights 1.65,1.75,1.85 --csv data/regression/baseline.csv`.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

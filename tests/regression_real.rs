@@ -4,7 +4,7 @@
 //! any affordance at any body height. Regenerate the baseline after a deliberate change with
 //! `afford eval data/real/labels.csv --heights 1.65,1.75,1.85 --csv data/real/baseline.csv`.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,5 +1,6 @@
 //! Writes, for a visual check, the pictures of an armchair and of a chair against a wall
-//! to `/tmp/render-*.png`. `cargo test --release --test render_demo -- --ignored`.
+//! to `/tmp/render-*.png`:
+//! `cargo test --release -p afford --test integration -- --ignored render_demo::`.
 
 use std::path::Path;
 

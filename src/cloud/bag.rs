@@ -374,7 +374,7 @@ fn topics(path: &Path, buf: &[u8]) -> Result<(BTreeSet<String>, Vec<String>), Cl
 /// Reads the PointCloud2 messages of a bag that `opts` selects (topic, then every N-th or
 /// the one nearest a time) and hands each to `each` as a part named by its log time
 /// ([`time_name`]), in file order. The points are in the message's frame, as sent.
-pub fn read_bag(
+pub(crate) fn read_bag(
     path: &Path,
     opts: &SourceOptions,
     each: &mut dyn FnMut(Part),

@@ -21,7 +21,7 @@ fn bad(path: &Path, at: String, what: impl std::fmt::Display) -> CloudError {
 
 /// Reads the scans of an E57 file in the file's coordinate system (metres): scan `scan`
 /// (counted from 1) or, for `None`, every scan one after the other.
-pub fn read_e57(path: &Path, scan: Option<usize>) -> Result<LoadedCloud, CloudError> {
+pub(crate) fn read_e57(path: &Path, scan: Option<usize>) -> Result<LoadedCloud, CloudError> {
     let file = std::fs::File::open(path).map_err(|source| CloudError::Io {
         path: path.to_path_buf(),
         source,

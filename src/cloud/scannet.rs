@@ -4,7 +4,7 @@
 
 /// The matrix text of the `axisAlignment` line of `text`, if `text` has one (the line as
 /// ScanNet writes it, or the whole meta file); `None` otherwise.
-pub fn axis_alignment(text: &str) -> Option<&str> {
+pub(crate) fn axis_alignment(text: &str) -> Option<&str> {
     text.lines().find_map(|line| {
         let (key, value) = line.split_once('=')?;
         (key.trim() == "axisAlignment").then_some(value)

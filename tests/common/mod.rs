@@ -9,7 +9,7 @@ use afford::eval::evaluate;
 use afford::model::set::ModelChoice;
 
 /// `(height in mm, affordance) -> F` of the main (non-doubtful) rows of an eval CSV.
-pub fn baseline(path: &Path) -> BTreeMap<(u32, String), f64> {
+pub(crate) fn baseline(path: &Path) -> BTreeMap<(u32, String), f64> {
     let mut r = csv::Reader::from_path(path).expect("baseline CSV is committed");
     let header = r.headers().unwrap().clone();
     let col = |name: &str| header.iter().position(|h| h == name).unwrap();
@@ -32,7 +32,7 @@ pub fn baseline(path: &Path) -> BTreeMap<(u32, String), f64> {
 /// Runs `afford eval` on `labels` with the built-in adult and hierarchies at `heights` and
 /// returns one line per (height, affordance) whose F fell below `base`, or has no F where
 /// the baseline has a positive one. Panics when a labelled file could not be scored.
-pub fn drops_below(
+pub(crate) fn drops_below(
     labels: &Path,
     base: &BTreeMap<(u32, String), f64>,
     heights: &[f64],

@@ -6,6 +6,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
+use crate::common::{s, text};
+
 fn afford_in(dir: &Path, args: &[&str], stdin: Option<&str>) -> Output {
     let mut child = Command::new(env!("CARGO_BIN_EXE_afford"))
         .current_dir(dir)
@@ -29,14 +31,6 @@ fn afford(args: &[&str]) -> Output {
         args,
         None,
     )
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-fn s(p: &Path) -> String {
-    p.display().to_string()
 }
 
 /// `n` tiny clouds (a few points: read and detected in no time) in `dir`, named `c00.xyz`...

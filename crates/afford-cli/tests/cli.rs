@@ -1,22 +1,10 @@
 //! The `afford` command line as a user runs it: outputs, exit codes and one-line errors.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn afford(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_afford"))
-        .current_dir(ROOT)
-        .args(args)
-        .output()
-        .expect("runs")
-}
+use crate::common::{afford, text, SAMPLE};
 
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-const SAMPLE: &str = "data/sample/room.ply";
-/// The repository root, where the binary runs and the relative paths above resolve.
+/// The repository root, where the binary runs and `SAMPLE` resolves.
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
 
 fn tmp() -> tempfile::TempDir {

@@ -239,7 +239,7 @@ fn a_wrong_topic_or_a_damaged_bag_is_one_line_naming_the_file() {
 }
 
 /// Fuzz seeds: bags in every compression, and bare messages (first byte 0: CDR).
-pub fn seeds(dir: &Path, pts: &[Point3<f64>]) {
+pub(crate) fn seeds(dir: &Path, pts: &[Point3<f64>]) {
     let clouds = [pts.to_vec(), pts.to_vec()];
     let layouts = [(2, 1, 2, false, true), (1, 0, 0, true, false)];
     for (name, c) in [

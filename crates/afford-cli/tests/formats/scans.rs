@@ -112,6 +112,6 @@ fn a_damaged_e57_is_one_line_naming_the_file() {
 }
 
 /// Fuzz seed: two scans, one posed.
-pub fn seed(path: &Path, pts: &[Point3<f64>]) {
+pub(crate) fn seed(path: &Path, pts: &[Point3<f64>]) {
     write_e57(path, &[pts.to_vec(), pts.to_vec()], &[false, true]);
 }

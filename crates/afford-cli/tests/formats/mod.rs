@@ -96,7 +96,8 @@ fn assert_finds_a_seat(doc: &Value, i: usize) {
 }
 
 /// Writes the seed files of the fuzz targets `bag`, `e57` and `depth` into
-/// `fuzz/corpus/` (run by hand: `cargo test --release --test formats -- --ignored`).
+/// `fuzz/corpus/` (run by hand: `cargo test --release -p afford-cli --test integration --
+/// --ignored formats::write_fuzz_seeds`).
 #[test]
 #[ignore]
 fn write_fuzz_seeds() {

@@ -1,10 +1,11 @@
-//! Helpers shared by the reliability tests: running the built binary, small clouds.
+//! Helpers shared by the command line's integration tests (`cli`, `batch`, `reliability`):
+//! running the built binary, small clouds.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Runs `afford` with `args` in the crate folder.
-pub fn afford(args: &[&str]) -> Output {
+pub(crate) fn afford(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_afford"))
         .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
         .args(args)
@@ -14,7 +15,7 @@ pub fn afford(args: &[&str]) -> Output {
 
 /// Runs `afford` under an address-space limit of `bytes` (the `prlimit` command; the crate
 /// forbids the unsafe code a `pre_exec` setrlimit would need).
-pub fn afford_limited(bytes: u64, args: &[&str]) -> Output {
+pub(crate) fn afford_limited(bytes: u64, args: &[&str]) -> Output {
     Command::new("prlimit")
         .arg(format!("--as={bytes}"))
         .arg(env!("CARGO_BIN_EXE_afford"))
@@ -25,21 +26,21 @@ pub fn afford_limited(bytes: u64, args: &[&str]) -> Output {
 }
 
 /// Standard error (or output) as text.
-pub fn text(b: &[u8]) -> String {
+pub(crate) fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
 }
 
 /// A path as an argument.
-pub fn s(p: &Path) -> String {
+pub(crate) fn s(p: &Path) -> String {
     p.display().to_string()
 }
 
 /// The committed sample room.
-pub const SAMPLE: &str = "data/sample/room.ply";
+pub(crate) const SAMPLE: &str = "data/sample/room.ply";
 
 /// A seat-sized scene in metres: a 2 m x 2 m floor and a 0.5 m x 0.5 m box top at 0.45 m,
 /// sampled every `step` metres, as `x y z` rows.
-pub fn small_scene(step: f64) -> Vec<[f64; 3]> {
+pub(crate) fn small_scene(step: f64) -> Vec<[f64; 3]> {
     let mut pts = Vec::new();
     let n = (2.0 / step) as usize;
     for i in 0..n {
@@ -57,7 +58,7 @@ pub fn small_scene(step: f64) -> Vec<[f64; 3]> {
 }
 
 /// Writes points as an `.xyz` file.
-pub fn write_xyz(path: &Path, pts: &[[f64; 3]]) -> PathBuf {
+pub(crate) fn write_xyz(path: &Path, pts: &[[f64; 3]]) -> PathBuf {
     let mut t = String::new();
     for p in pts {
         t.push_str(&format!("{} {} {}\n", p[0], p[1], p[2]));
@@ -67,7 +68,7 @@ pub fn write_xyz(path: &Path, pts: &[[f64; 3]]) -> PathBuf {
 }
 
 /// The stderr lines starting with `error:`.
-pub fn error_lines(o: &Output) -> Vec<String> {
+pub(crate) fn error_lines(o: &Output) -> Vec<String> {
     text(&o.stderr)
         .lines()
         .filter(|l| l.starts_with("error:"))
@@ -77,7 +78,7 @@ pub fn error_lines(o: &Output) -> Vec<String> {
 
 /// A 125 KB PCD header: 7000 fields of SIZE 8 and COUNT 1048576, POINTS 0 (its record
 /// would take 58.7 GB).
-pub fn huge_record_pcd() -> Vec<u8> {
+pub(crate) fn huge_record_pcd() -> Vec<u8> {
     let n = 7000;
     let names: Vec<String> = ["x", "y", "z"]
         .iter()
@@ -97,6 +98,6 @@ pub fn huge_record_pcd() -> Vec<u8> {
 }
 
 /// A 55-byte OFF file whose face says it has 2^64 - 1 corners.
-pub fn huge_corner_off() -> Vec<u8> {
+pub(crate) fn huge_corner_off() -> Vec<u8> {
     b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n18446744073709551615 0 1 2\n".to_vec()
 }

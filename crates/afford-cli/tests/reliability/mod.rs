@@ -1,8 +1,6 @@
-//! Reliability (issue 15): no input aborts a run, no output destroys a file, every failure
+//! Reliability: no input aborts a run, no output destroys a file, every failure
 //! says what it is. One module per problem, each opening with its cause; the malformed
-//! inputs are built in the tests.
-
-mod common;
+//! inputs are built in the tests; the helpers are the crate's `common`.
 
 mod batch_under_address_limit;
 mod control_bytes_in_errors;
