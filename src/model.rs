@@ -405,6 +405,30 @@ pub(crate) struct Source<'a> {
 }
 
 impl Source<'_> {
+    /// The file name and text of the model `name` this file refers to at `key` (an agent's
+    /// `extends`, a hierarchy's `shares`): one of `builtins` (shown as in `folder`), or a
+    /// file beside this one; an error at `key` naming the `kind` of model otherwise.
+    pub(crate) fn referred(
+        &self,
+        key: &Key,
+        name: &str,
+        builtins: &'static [(&'static str, &'static str)],
+        folder: &str,
+        kind: &str,
+    ) -> Result<(PathBuf, String), ModelError> {
+        if let Some((n, t)) = builtins.iter().find(|(n, _)| *n == name) {
+            return Ok((set::Source::Builtin(n, t).label(folder), t.to_string()));
+        }
+        let path = self.path.parent().unwrap_or(Path::new("")).join(name);
+        let text = read_text(&path).map_err(|e| {
+            self.invalid(
+                key,
+                format!("`{name}` is neither a built-in {kind} nor a readable file: {e}"),
+            )
+        })?;
+        Ok((path, text))
+    }
+
     /// A [`ModelError::Invalid`] at `key`, with its line.
     pub(crate) fn invalid(&self, key: &Key, what: impl Into<String>) -> ModelError {
         ModelError::Invalid {

@@ -259,12 +259,7 @@ fn a_new_hierarchy_draws_in_its_own_colours() {
         "suppression_radius = 0.25",
         "legend = [{ id = \"perching\", colour = [10, 20, 30] }]\nsuppression_radius = 0.25",
     );
-    let agent = Agent::from_toml(
-        afford::model::set::BUILTIN_AGENT,
-        Path::new("human.toml"),
-        1.75,
-    )
-    .unwrap();
+    let (agent, _) = models(1.75);
     let dir = tempfile::tempdir().unwrap();
     let h = Hierarchy::load(&write(&dir, &text), &agent).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(mesh_colour(&o, &h), [10, 20, 30]);

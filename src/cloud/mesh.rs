@@ -15,7 +15,7 @@ use nalgebra::Point3;
 use std::borrow::Cow;
 
 use super::{CloudError, PointCloud};
-use crate::mesh::ply::{read_mesh_ply, MeshError};
+use crate::mesh::ply::{parse_mesh_ply, MeshError};
 use crate::mesh::{sample_surface, Mesh, Part};
 
 /// [`sample_mesh`] never draws more than about this many points: a higher density is
@@ -63,12 +63,11 @@ pub fn read_stl(path: &Path) -> Result<Mesh, CloudError> {
     parse_stl(&read_bytes(path)?, path)
 }
 
-/// Reads a PLY mesh with [`read_mesh_ply`], after checking its element counts against the
-/// file size.
+/// Reads a PLY mesh (the file once, within the mesh size limit) with
+/// [`parse_mesh_ply`], which checks its element counts against the file size.
 pub fn read_ply_mesh(path: &Path) -> Result<Mesh, CloudError> {
     let bytes = read_bytes(path)?;
-    check_ply_counts(&bytes, path)?;
-    read_mesh_ply(path).map_err(|e| match e {
+    parse_mesh_ply(&bytes, path).map_err(|e| match e {
         MeshError::Io { path, source } => CloudError::Io { path, source },
         MeshError::Header(e) => e,
         MeshError::Format { path, what } => CloudError::Body {
@@ -586,26 +585,6 @@ fn parse_stl_ascii(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
 /// Refuses PLY headers whose element counts exceed the file size (each element item
 /// takes at least one byte), so that a lying header cannot make the reader loop or
 /// allocate for long.
-fn check_ply_counts(bytes: &[u8], path: &Path) -> Result<(), CloudError> {
-    let mut r = bytes;
-    let header = super::parse_header(path, &mut r)?;
-    for e in &header.elements {
-        if e.count > bytes.len() as u64 {
-            return Err(header_err(
-                path,
-                format!("line {}", e.line),
-                format!(
-                    "element '{}' count '{}' cannot fit in a file of {} bytes",
-                    e.name,
-                    e.count,
-                    bytes.len()
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -46,12 +46,35 @@ pub fn read_mesh_ply(path: &Path) -> Result<Mesh, MeshError> {
         path: path.to_path_buf(),
         source,
     })?;
+    parse_mesh_ply(&bytes, path)
+}
+
+/// The mesh of the PLY file `bytes` (`path` only names it in errors), as
+/// [`read_mesh_ply`]: element counts that cannot fit in the file are refused before
+/// anything is allocated.
+pub fn parse_mesh_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
     let err = |what: String| MeshError::Format {
         path: path.to_path_buf(),
         what,
     };
-    let mut r: &[u8] = &bytes;
+    let mut r: &[u8] = bytes;
     let header = parse_header(path, &mut r)?;
+    if let Some(e) = header
+        .elements
+        .iter()
+        .find(|e| e.count > bytes.len() as u64)
+    {
+        return Err(MeshError::Header(CloudError::Header {
+            path: path.to_path_buf(),
+            at: format!("line {}", e.line),
+            what: format!(
+                "element '{}' count '{}' cannot fit in a file of {} bytes",
+                e.name,
+                e.count,
+                bytes.len()
+            ),
+        }));
+    }
     let data = r;
     let mut mesh = Mesh::new();
     let mut vertices: Vec<Point3<f64>> = Vec::new();

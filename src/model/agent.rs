@@ -212,28 +212,13 @@ impl Agent {
         let src = Source { path, text };
         let file: DerivedFile = parse_toml(text, path)?;
         let extends = Key::top("extends");
-        let builtin = crate::model::set::BUILTIN_AGENTS
-            .iter()
-            .find(|(n, _)| *n == file.extends);
-        let (base_path, base_text) = match builtin {
-            Some((n, t)) => (
-                std::path::PathBuf::from(format!("(built-in) agents/{n}.toml")),
-                t.to_string(),
-            ),
-            None => {
-                let p = path.parent().unwrap_or(Path::new("")).join(&file.extends);
-                let t = read_text(&p).map_err(|e| {
-                    src.invalid(
-                        &extends,
-                        format!(
-                            "`{}` is neither a built-in agent nor a readable file: {e}",
-                            file.extends
-                        ),
-                    )
-                })?;
-                (p, t)
-            }
-        };
+        let (base_path, base_text) = src.referred(
+            &extends,
+            &file.extends,
+            crate::model::set::BUILTIN_AGENTS,
+            "agents",
+            "agent",
+        )?;
         if extends_of(&base_text).is_some() {
             return Err(src.invalid(
                 &extends,

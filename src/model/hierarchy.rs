@@ -467,25 +467,13 @@ fn shared(
     src: Source,
 ) -> Result<File, ModelError> {
     let key = Key::top("shares");
-    let builtin = crate::model::set::BUILTIN_HIERARCHIES
-        .iter()
-        .find(|(n, _)| *n == other);
-    let (base_path, base_text) = match builtin {
-        Some((n, t)) => (
-            std::path::PathBuf::from(format!("(built-in) affordances/{n}.toml")),
-            t.to_string(),
-        ),
-        None => {
-            let p = src.path.parent().unwrap_or(Path::new("")).join(other);
-            let t = read_text(&p).map_err(|e| {
-                src.invalid(
-                    &key,
-                    format!("`{other}` is neither a built-in hierarchy nor a readable file: {e}"),
-                )
-            })?;
-            (p, t)
-        }
-    };
+    let (base_path, base_text) = src.referred(
+        &key,
+        other,
+        crate::model::set::BUILTIN_HIERARCHIES,
+        "affordances",
+        "hierarchy",
+    )?;
     let base: File<toml::Table, toml::Table> = parse_toml(&base_text, &base_path)?;
     if base.shares.is_some() {
         return Err(src.invalid(&key, format!("`{other}` shares another's values itself")));
