@@ -317,3 +317,35 @@ fn a_cloud_of_4_cm_vertices_gives_sitting_and_lying() {
         o.stats
     );
 }
+
+/// Seats above knee height that a person still perches on with the feet on the floor: a
+/// 0.55 m stool and the edge of a 0.60 m bed give sitting at 1.75 m (the thighs slope
+/// down: the sitting node's `fallback`); a 0.72 m table top does not. Before the
+/// fallback, nothing above ~0.50 m gave sitting at 1.75 m.
+#[test]
+fn a_stool_and_a_bed_above_knee_height_are_perched_on() {
+    let high_stool = stool(&StoolParams {
+        seat_height: 0.55,
+        ..StoolParams::default()
+    });
+    let o = run(&cloud(&[high_stool]), 1.75);
+    assert_eq!(affords(&o), ["sitting"], "0.55 m stool: {:?}", o.stats);
+    let high_bed = bed(&BedParams {
+        mattress_height: 0.60,
+        // The frame's top (a face inside the bed) below seat height, as on a real bed,
+        // where no scan sees it; at 0.38 m the height map takes the mattress for a roof.
+        mattress_thickness: 0.30,
+        headboard_height: 0.0,
+        ..BedParams::default()
+    });
+    let o = run(&cloud(&[high_bed]), 1.75);
+    assert_eq!(affords(&o), ["sitting"], "0.60 m bed: {:?}", o.stats);
+    let table = stool(&StoolParams {
+        seat_height: 0.72,
+        seat_size: 0.8,
+        round: false,
+        ..StoolParams::default()
+    });
+    let o = run(&cloud(&[table]), 1.75);
+    assert!(affords(&o).is_empty(), "0.72 m table top: {:?}", o.stats);
+}

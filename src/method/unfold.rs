@@ -13,7 +13,7 @@
 use crate::method::fit::{ContactConfig, Fit};
 use crate::method::scene::Scene;
 use crate::model::agent::{Agent, Cylinder, Placement, Posture};
-use crate::model::hierarchy::{Hierarchy, Node, Spread};
+use crate::model::hierarchy::{Fallback, Hierarchy, Node, Spread};
 
 /// The outcome of one node.
 #[derive(Debug, Clone, PartialEq)]
@@ -268,6 +268,60 @@ impl NodeContext<'_> {
             })
     }
 
+    /// `fallback`: for a branch whose sweep found nothing, sets the node's fallback joints
+    /// that move the branch's links to their `k`-th angles (k = 0, 1, ..., all together)
+    /// and sweeps the branch again; a setting is tried only if the links those joints move
+    /// and the branch's sweeps do not (the thigh under a knee sweep) are free of the scene
+    /// over their `free` span. Returns the first setting that touches: its sweep
+    /// parameter, local score (Eq. 3) and posture. `None` when the node has no fallback
+    /// for this branch or no setting touched.
+    pub fn fallback(
+        &self,
+        posture: &Posture,
+        branch: &[usize],
+        links: &[usize],
+    ) -> Option<(f64, f64, Posture)> {
+        let (agent, node) = (self.agent, self.node);
+        let mine: Vec<&Fallback> = node
+            .fallbacks
+            .iter()
+            .filter(|fb| links.iter().any(|&l| agent.is_descendant(l, fb.joint)))
+            .collect();
+        let settings = mine.iter().map(|fb| fb.angles.len()).max()?;
+        let swept = |l: usize| {
+            branch
+                .iter()
+                .any(|&s| agent.is_descendant(l, node.sweeps[s].joint))
+        };
+        let held = |l: usize| mine.iter().find(|fb| agent.is_descendant(l, fb.joint));
+        let mut frames = Vec::new();
+        for k in 0..settings {
+            let mut trial = posture.clone();
+            for fb in &mine {
+                trial.angles[fb.joint] = fb.angles[k.min(fb.angles.len() - 1)];
+            }
+            agent.forward_kinematics(self.place, &trial, &mut frames);
+            let blocked = agent
+                .cylinders(&frames, |l| !swept(l) && held(l).is_some())
+                .into_iter()
+                .any(|mut c| {
+                    let [s0, s1] = held(c.joint).map_or([0.0, 1.0], |fb| fb.free);
+                    let (a, d) = (c.a, c.b - c.a);
+                    c.a = a + d * s0;
+                    c.b = a + d * s1;
+                    self.scene.clearance(&c) <= 0.0 && self.scene.intersects(&c)
+                });
+            if blocked {
+                continue;
+            }
+            let (hit, r) = self.sweep_branch(&mut trial, branch, links);
+            if let Some(t) = hit {
+                return Some((t, r, trial));
+            }
+        }
+        None
+    }
+
     /// Sweeps one kinematic branch of the node from theta1 towards theta2, stopping at the
     /// first contact of its links that the rules accept; writes Eq. 2's angles into
     /// `posture` and returns the contact parameter and the branch's local score (Eq. 3).
@@ -409,10 +463,18 @@ impl NodeContext<'_> {
                         best = Some((hit, r, trial));
                     }
                 }
+                if best.as_ref().is_none_or(|b| b.0.is_none()) {
+                    if let Some((t, r, trial)) = self.fallback(&node_posture, branch, links) {
+                        best = Some((Some(t), r, trial));
+                    }
+                }
                 if let Some((hit, r, trial)) = best {
                     for &s in branch {
                         let j = node.sweeps[s].joint;
                         node_posture.angles[j] = trial.angles[j];
+                    }
+                    for fb in &node.fallbacks {
+                        node_posture.angles[fb.joint] = trial.angles[fb.joint];
                     }
                     for sp in &spreads {
                         node_posture.angles[sp.joint] = trial.angles[sp.joint];

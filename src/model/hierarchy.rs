@@ -143,6 +143,11 @@ pub struct Node {
     /// the paper: the arm looks for an armrest at several abductions); each kinematic
     /// branch keeps the setting that scores best.
     pub spreads: Vec<Spread>,
+    /// Joints set to each of several angles in turn, only for a kinematic branch that
+    /// found nothing at its own setting (an extension of the paper: where the shanks hang
+    /// free with the thighs level, the thighs slope down until the feet reach the floor);
+    /// the first setting that touches is kept.
+    pub fallbacks: Vec<Fallback>,
     /// Joints held within a range while this node is judged (an extension of the paper:
     /// a headrest is judged at a plausible trunk recline); kept when the node is found.
     pub clamps: Vec<Clamp>,
@@ -193,6 +198,19 @@ pub struct Spread {
     pub joint: usize,
     /// Angles tried, radians, in order (the first is kept when nothing is touched).
     pub angles: Vec<f64>,
+}
+
+/// A joint tried at further angles (radians), in order, for a kinematic branch whose sweep
+/// found nothing: the links it moves and the branch's sweeps do not (the thigh, for a hip
+/// under a knee sweep) must then be free of the scene over the span `free` of their length.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fallback {
+    /// Joint index in the agent.
+    pub joint: usize,
+    /// Angles tried after the node's own setting, radians, in order.
+    pub angles: Vec<f64>,
+    /// The part of each link it moves that must be free, fractions `[from, to]` of its length.
+    pub free: [f64; 2],
 }
 
 /// A whole affordance hierarchy resolved against an agent.
@@ -304,6 +322,8 @@ struct NodeFile {
     #[serde(default)]
     spread: Vec<SpreadFile>,
     #[serde(default)]
+    fallback: Vec<FallbackFile>,
+    #[serde(default)]
     clamp: Vec<ClampFile>,
     #[serde(default)]
     release: Option<[f64; 3]>,
@@ -338,6 +358,19 @@ enum LinkRef {
 struct SpreadFile {
     joint: String,
     angles: Vec<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FallbackFile {
+    joint: String,
+    angles: Vec<f64>,
+    #[serde(default = "whole")]
+    free: [f64; 2],
+}
+
+fn whole() -> [f64; 2] {
+    [0.0, 1.0]
 }
 
 fn yes() -> bool {
@@ -887,6 +920,47 @@ fn resolve_node(
             angles: sp.angles.iter().map(|a| a.to_radians()).collect(),
         });
     }
+    let mut fallbacks: Vec<Fallback> = Vec::new();
+    for (k, fb) in n.fallback.iter().enumerate() {
+        let fk = key.key("fallback").item(k, &fb.joint);
+        let j = names.joint(&fk.key("joint"), &fb.joint)?;
+        if fb.angles.is_empty() || fb.angles.iter().any(|a| !a.is_finite()) {
+            return Err(src.invalid(&fk.key("angles"), "needs finite angles"));
+        }
+        let [f0, f1] = fb.free;
+        if !(0.0..=1.0).contains(&f0) || !(0.0..=1.0).contains(&f1) || f0 > f1 {
+            return Err(src.invalid(
+                &fk.key("free"),
+                format!("[{f0}, {f1}] is not a span within [0, 1]"),
+            ));
+        }
+        if sweeps.iter().any(|s| s.joint == j) || spreads.iter().any(|s| s.joint == j) {
+            return Err(src.invalid(
+                &fk.key("joint"),
+                format!("joint `{}` is already swept or spread", fb.joint),
+            ));
+        }
+        if fallbacks.iter().any(|o| o.joint == j) {
+            return Err(src.invalid(
+                &fk.key("joint"),
+                format!("joint `{}` falls back twice", fb.joint),
+            ));
+        }
+        if !links.iter().any(|&l| agent.is_descendant(l, j)) {
+            return Err(src.invalid(
+                &fk.key("joint"),
+                format!("joint `{}` moves none of the node's links", fb.joint),
+            ));
+        }
+        for &a in &fb.angles {
+            names.within_limit(&fk.key("angles"), j, &agent.joints[j].axis, a)?;
+        }
+        fallbacks.push(Fallback {
+            joint: j,
+            angles: fb.angles.iter().map(|a| a.to_radians()).collect(),
+            free: fb.free,
+        });
+    }
     let mut clamps = Vec::new();
     for (k, c) in n.clamp.iter().enumerate() {
         let ck = key.key("clamp").item(k, &c.joint);
@@ -920,6 +994,7 @@ fn resolve_node(
         spans,
         sweeps,
         spreads,
+        fallbacks,
         clamps,
         release,
         free_start: n.free_start,
@@ -1170,6 +1245,43 @@ mod tests {
     }
 
     #[test]
+    fn fallbacks_are_resolved_and_checked() {
+        let h = load(BUILTIN_SITTING).unwrap();
+        let hip_l = agent().joint_index("hip_l").unwrap();
+        let fb = &h.nodes[0].fallbacks[0];
+        assert_eq!(fb.joint, hip_l);
+        assert!((fb.angles[1] - 70f64.to_radians()).abs() < 1e-12);
+        assert_eq!(fb.free, [0.5, 1.0]);
+        // The hip flexes at most 130 deg; a free span must lie within the link.
+        let (e, line) = edited(
+            "{ joint = \"hip_l\", angles = [80.0, 70.0]",
+            "{ joint = \"hip_l\", angles = [80.0, 140.0]",
+        );
+        names(
+            &e,
+            line,
+            "node.sitting.fallback.hip_l.angles",
+            "outside its limit",
+        );
+        let (e, line) = edited(
+            "{ joint = \"hip_r\", angles = [80.0, 70.0], free = [0.5, 1.0]",
+            "{ joint = \"hip_r\", angles = [80.0, 70.0], free = [0.5, 1.5]",
+        );
+        names(&e, line, "node.sitting.fallback.hip_r.free", "not a span");
+        // A swept joint cannot fall back as well.
+        let (e, line) = edited(
+            "{ joint = \"hip_l\", angles = [80.0, 70.0]",
+            "{ joint = \"knee_l\", angles = [80.0, 70.0]",
+        );
+        names(
+            &e,
+            line,
+            "node.sitting.fallback.knee_l.joint",
+            "already swept",
+        );
+    }
+
+    #[test]
     fn a_missing_parent_node_is_named() {
         let (e, line) = edited("parent = \"backrest\"", "parent = \"back\"");
         names(&e, line, "node.headrest.parent", "missing node `back`");
@@ -1229,8 +1341,8 @@ mod tests {
         let (e, line) = edited("sigma_d = 0.03", "sigma_d = -0.03");
         names(&e, line, "fit.sigma_d", "must be positive");
         let (e, line) = edited(
-            "height = [0.14, 0.21, 0.28, 0.33]",
-            "height = [0.14, 0.28, 0.21, 0.33]",
+            "height = [0.14, 0.21, 0.34, 0.40]",
+            "height = [0.14, 0.34, 0.21, 0.40]",
         );
         names(&e, line, "hypothesis.height", "increasing order");
     }

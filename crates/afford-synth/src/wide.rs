@@ -76,8 +76,9 @@ pub const TRUNK_CLEARANCE_M: f64 = 0.30;
 /// it, so they are beside the elbow, never under the forearm.
 pub const ARMREST_BAND_TOP_M: f64 = 0.35;
 /// Highest night-stand top labelled `doubtful` (sittable by geometry, negative by
-/// convention), metres: the top of the seat band, 0.33 H for the 1.75 m adult.
-pub const NIGHT_STAND_DOUBT_MAX_M: f64 = 0.58;
+/// convention), metres: the highest seat the 1.75 m adult perches on with the feet on the
+/// floor, 0.37 H (thighs sloping 20 degrees; docs/conventions.md).
+pub const NIGHT_STAND_DOUBT_MAX_M: f64 = 0.64;
 /// The `doubtful` text of night stands low enough to sit on.
 pub const NIGHT_STAND_DOUBT: &str =
     "night stand top at seat height: sittable by geometry, negative by convention";
