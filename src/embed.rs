@@ -149,14 +149,19 @@ mod tests {
         pts
     }
 
-    #[test]
-    fn non_finite_rows_are_dropped_and_the_rest_keep_their_rows() {
-        let models = ModelChoice {
+    /// The built-in human at 1.75 m with the sitting hierarchy.
+    fn sitting() -> Vec<Model> {
+        ModelChoice {
             hierarchies: vec!["sitting".into()],
             ..Default::default()
         }
         .load()
-        .unwrap();
+        .unwrap()
+    }
+
+    #[test]
+    fn non_finite_rows_are_dropped_and_the_rest_keep_their_rows() {
+        let models = sitting();
         let clean = stool();
         let mut holed = clean.clone();
         holed.insert(0, Point3::new(f64::NAN, 0.0, 0.0));
@@ -180,12 +185,7 @@ mod tests {
 
     #[test]
     fn the_extent_guard_runs_as_in_afford_detect() {
-        let models = ModelChoice {
-            hierarchies: vec!["sitting".into()],
-            ..Default::default()
-        }
-        .load()
-        .unwrap();
+        let models = sitting();
         let cfg = DetectConfig::default();
         // A point 1e8 m away (a grid over that box would not fit any memory): refused
         // with detect's line.
