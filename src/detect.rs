@@ -1,10 +1,13 @@
 //! The pipeline of section 4, stage after stage: height map, hypotheses, scene, fitting,
 //! unfolding, selection and segmentation.
 
+use std::path::Path;
+
 use nalgebra::Point3;
 use rayon::prelude::*;
 
 use crate::cloud::PointCloud;
+use crate::method::extent::{guard, ExtentConfig, ExtentError};
 use crate::method::fit::{fit, ContactConfig, Fit};
 use crate::method::heightmap::{HeightMap, HeightMapConfig};
 use crate::method::hypotheses::{hypotheses, Hypothesis};
@@ -185,9 +188,36 @@ pub fn detect(cloud: &PointCloud, agent: &Agent, h: &Hierarchy, cfg: &DetectConf
 }
 
 /// Runs the method on `cloud` for every model of a set (each body with each hierarchy),
-/// building the height map and the voxelised scene once for all of them.
+/// building the height map and the voxelised scene once for all of them, from every point
+/// (no extent guard: a file is detected in with [`detect_input`]).
 pub fn detect_all(cloud: &PointCloud, models: &[Model], cfg: &DetectConfig) -> Vec<Outcome> {
     detect_all_prepared(cloud, &prepare(cloud, cfg), models, cfg)
+}
+
+/// The grids of `cloud` (world frame, metres; read from `path`, which names it in
+/// messages) as every command builds them: from the points the extent guard
+/// ([`crate::method::extent::guard`], default limits) keeps. Refuses what the guard refuses.
+pub fn prepare_guarded(
+    path: &Path,
+    cloud: &PointCloud,
+    cfg: &DetectConfig,
+) -> Result<Prepared, ExtentError> {
+    let kept = guard(path, cloud, cfg, &ExtentConfig::default())?;
+    Ok(prepare(&kept.cloud, cfg))
+}
+
+/// Detection on one input cloud, the one per-file path of `afford detect`, `afford eval`,
+/// `afford inspect` and the Python package: the grids from [`prepare_guarded`], every model
+/// of the set on them, and the segments over every point of `cloud` (stray points
+/// included), so that the outcomes' labels line up with `cloud`.
+pub fn detect_input(
+    path: &Path,
+    cloud: &PointCloud,
+    models: &[Model],
+    cfg: &DetectConfig,
+) -> Result<Vec<Outcome>, ExtentError> {
+    let prepared = prepare_guarded(path, cloud, cfg)?;
+    Ok(detect_all_prepared(cloud, &prepared, models, cfg))
 }
 
 /// [`detect_all`] on a scene already prepared (the caller also draws its height map).

@@ -1,6 +1,6 @@
 //! Detection for programs that hold the cloud in memory (the Python package): the same
 //! path as `afford detect` on one input ([`crate::input::to_input`], then
-//! [`crate::detect::detect_all`] and [`FileReport::new`]), with what a caller needs
+//! [`crate::detect::detect_input`] and [`FileReport::new`]), with what a caller needs
 //! besides the report: which input row each point came from, the points of every
 //! detection's segment, and the map to the world frame.
 
@@ -9,8 +9,9 @@ use std::path::Path;
 use nalgebra::{Matrix4, Point3};
 
 use crate::cloud::{keep_finite, FrameOptions, FrameReport};
-use crate::detect::{detect_all, DetectConfig};
+use crate::detect::{detect_input, DetectConfig};
 use crate::input::{load_input, to_input, Input, InputError, InputOptions};
+use crate::method::extent::ExtentError;
 use crate::model::set::Model;
 use crate::report::FileReport;
 
@@ -30,6 +31,17 @@ pub struct Detected {
     pub frame: Option<FrameReport>,
     /// A warning about the units the extent suggests (names the input).
     pub units_warning: Option<String>,
+}
+
+/// Why an input gave no detection.
+#[derive(Debug, thiserror::Error)]
+pub enum DetectError {
+    /// It could not be read or brought into the world frame.
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// Its coordinates or extent are refused before the grids ([`crate::method::extent`]).
+    #[error(transparent)]
+    Extent(#[from] ExtentError),
 }
 
 impl Detected {
@@ -53,7 +65,7 @@ pub fn detect_points(
     frame: &FrameOptions,
     models: &[Model],
     cfg: &DetectConfig,
-) -> Result<Detected, InputError> {
+) -> Result<Detected, DetectError> {
     let rows: Vec<usize> = raw
         .iter()
         .enumerate()
@@ -61,7 +73,7 @@ pub fn detect_points(
         .map(|(i, _)| i)
         .collect();
     let input = to_input(Path::new(name), keep_finite(raw), frame)?;
-    Ok(detect_in(name, input, rows, models, cfg))
+    detect_in(name, input, rows, models, cfg)
 }
 
 /// Reads and detects in one file exactly as `afford detect` does with `opts` (the
@@ -72,16 +84,10 @@ pub fn detect_path(
     opts: &InputOptions,
     models: &[Model],
     cfg: &DetectConfig,
-) -> Result<Detected, InputError> {
+) -> Result<Detected, DetectError> {
     let input = load_input(path, opts)?;
     let rows = (0..input.cloud.len()).collect();
-    Ok(detect_in(
-        &path.display().to_string(),
-        input,
-        rows,
-        models,
-        cfg,
-    ))
+    detect_in(&path.display().to_string(), input, rows, models, cfg)
 }
 
 fn detect_in(
@@ -90,8 +96,8 @@ fn detect_in(
     rows: Vec<usize>,
     models: &[Model],
     cfg: &DetectConfig,
-) -> Detected {
-    let outcomes = detect_all(&input.cloud, models, cfg);
+) -> Result<Detected, DetectError> {
+    let outcomes = detect_input(Path::new(name), &input.cloud, models, cfg)?;
     let mut segments = Vec::new();
     for o in &outcomes {
         let mut own = vec![Vec::new(); o.detections.len()];
@@ -109,13 +115,13 @@ fn detect_in(
         models,
         outcomes,
     );
-    Detected {
+    Ok(Detected {
         report,
         rows,
         segments,
         frame: input.frame,
         units_warning: input.units_warning,
-    }
+    })
 }
 
 #[cfg(test)]
@@ -143,14 +149,19 @@ mod tests {
         pts
     }
 
-    #[test]
-    fn non_finite_rows_are_dropped_and_the_rest_keep_their_rows() {
-        let models = ModelChoice {
+    /// The built-in human at 1.75 m with the sitting hierarchy.
+    fn sitting() -> Vec<Model> {
+        ModelChoice {
             hierarchies: vec!["sitting".into()],
             ..Default::default()
         }
         .load()
-        .unwrap();
+        .unwrap()
+    }
+
+    #[test]
+    fn non_finite_rows_are_dropped_and_the_rest_keep_their_rows() {
+        let models = sitting();
         let clean = stool();
         let mut holed = clean.clone();
         holed.insert(0, Point3::new(f64::NAN, 0.0, 0.0));
@@ -170,5 +181,34 @@ mod tests {
             assert_eq!(s.len(), d.segment_points);
         }
         assert_eq!(a.matrix(), Matrix4::identity());
+    }
+
+    #[test]
+    fn the_extent_guard_runs_as_in_afford_detect() {
+        let models = sitting();
+        let cfg = DetectConfig::default();
+        // A point 1e8 m away (a grid over that box would not fit any memory): refused
+        // with detect's line.
+        let mut far = stool();
+        far.push(Point3::new(1e8, 0.0, 0.0));
+        let Err(e) = detect_points("far", far, &FrameOptions::default(), &models, &cfg) else {
+            panic!("detected over a box of 1e8 m");
+        };
+        assert!(matches!(
+            e,
+            DetectError::Extent(ExtentError::Coordinate { .. })
+        ));
+        assert!(
+            e.to_string().starts_with("far: point 41600: coordinate"),
+            "{e}"
+        );
+        // A stray point is left out of the grids: the stool is found as without it.
+        let mut stray = stool();
+        stray.push(Point3::new(100.0, 100.0, 0.0));
+        let a = detect_points("a", stool(), &FrameOptions::default(), &models, &cfg).unwrap();
+        let b = detect_points("a", stray, &FrameOptions::default(), &models, &cfg).unwrap();
+        assert!(!a.report.detections.is_empty(), "the stool is found");
+        assert_eq!(a.report.detections, b.report.detections);
+        assert_eq!(b.report.labels.len(), a.report.labels.len() + 1);
     }
 }

@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::cloud;
-use crate::detect::{detect_all, DetectConfig};
+use crate::detect::{detect_input, DetectConfig};
 use crate::input::InputOptions;
 use crate::model::set::{ids as ids_of, load_set, Model, ModelChoice};
 use crate::model::ModelError;
@@ -489,7 +489,11 @@ fn setup(labels_csv: &Path, choice: &ModelChoice) -> Result<Setup, EvalError> {
 /// Runs detection on every file of `labels_csv` (paths relative to it) with every body of
 /// `models` (each agent at each height, with every hierarchy), reading the files as
 /// `input` says and building the scene as `cfg` says, and scores the answers (see the module
-/// documentation). Files run in parallel (rayon); `progress` shows a progress bar on stderr.
+/// documentation). Each file goes through the per-file path of `afford detect`
+/// ([`crate::input::load_input`], then [`detect_input`] with every body at once), so a file
+/// affords here what `afford detect` finds in it with the same flags; a file the extent
+/// guard refuses counts as failed. Files run in parallel (rayon); `progress` shows a
+/// progress bar on stderr.
 pub fn evaluate(
     labels_csv: &Path,
     models: &ModelChoice,
@@ -502,6 +506,7 @@ pub fn evaluate(
     let Setup {
         models, rows, ids, ..
     } = setup;
+    let all: Vec<Model> = models.iter().flatten().cloned().collect();
     let bar = if progress {
         indicatif::ProgressBar::new(rows.len() as u64)
     } else {
@@ -520,7 +525,7 @@ pub fn evaluate(
             } else {
                 None
             };
-            let out = loaded.map(|loaded| {
+            let out = loaded.and_then(|loaded| {
                 // Part labels only line up with the points if nothing was dropped.
                 let target: Option<Vec<bool>> =
                     parts.filter(|p| p.len() == loaded.cloud.len()).map(|p| {
@@ -528,10 +533,15 @@ pub fn evaluate(
                             .map(|&c| crate::mesh::is_body_part_code(c))
                             .collect()
                     });
-                models
+                // The path of `afford detect` on this file with every body at once; the
+                // outcomes come back in model order, one set (body) after the other.
+                let mut outcomes = detect_input(&row.path, &loaded.cloud, &all, cfg)
+                    .map_err(|e| e.to_string())?
+                    .into_iter();
+                Ok(models
                     .iter()
                     .map(|set| {
-                        let outcomes = detect_all(&loaded.cloud, set, cfg);
+                        let outcomes = outcomes.by_ref().take(set.len()).collect();
                         let r = FileReport::new(
                             row.file.clone(),
                             loaded.cloud.len(),
@@ -553,7 +563,7 @@ pub fn evaluate(
                             });
                         (found, seg)
                     })
-                    .collect()
+                    .collect())
             });
             bar.inc(1);
             out

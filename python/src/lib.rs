@@ -40,6 +40,15 @@ fn input_error(e: InputError) -> PyErr {
     }
 }
 
+/// A detection error: an input error as [`input_error`]; a cloud the extent guard refuses
+/// (coordinates beyond the grids, grids over the memory limit) as `ValueError`.
+fn detect_error(e: embed::DetectError) -> PyErr {
+    match e {
+        embed::DetectError::Input(e) => input_error(e),
+        embed::DetectError::Extent(e) => PyValueError::new_err(e.to_string()),
+    }
+}
+
 /// Model errors: a missing model file or unknown name is `FileNotFoundError`, another
 /// read failure `OSError`, a malformed or impossible model `ValueError`.
 fn model_error(e: ModelError) -> PyErr {
@@ -250,7 +259,7 @@ fn detect_array<'py>(
     let d = detached(py, threads, || {
         embed::detect_points(name, raw, &frame, &models, &cfg)
     })?
-    .map_err(input_error)?;
+    .map_err(detect_error)?;
     detected_dict(py, &d, n)
 }
 
@@ -282,7 +291,7 @@ fn detect_file<'py>(
     let d = detached(py, threads, || {
         embed::detect_path(Path::new(path), &opts, &models, &cfg)
     })?
-    .map_err(input_error)?;
+    .map_err(detect_error)?;
     let n = d.rows.len();
     detected_dict(py, &d, n)
 }

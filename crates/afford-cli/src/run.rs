@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 use crate::batch::{self, LogLine, Shard, Status};
 use crate::settings::Settings;
 use afford::cloud;
-use afford::detect::{detect_all_prepared, prepare, DetectConfig};
+use afford::detect::{detect_input, prepare_guarded, DetectConfig};
 use afford::input::{load_input, Input, InputOptions};
-use afford::method::extent::{guard, ExtentConfig, ExtentError};
+use afford::method::extent::ExtentError;
 use afford::model::set::Model;
 use afford::report::render::Legend;
 use afford::report::{self, FileReport};
@@ -76,8 +76,9 @@ pub enum FileError {
     Extent(#[from] ExtentError),
 }
 
-/// Detection on one cloud: the grids are built from the points [`afford::method::extent::guard`]
-/// keeps; the segments and the report cover every point of `cloud`.
+/// Detection on one cloud ([`afford::detect::detect_input`], the path `afford eval` scores):
+/// the grids are built from the points [`afford::method::extent::guard`] keeps; the
+/// segments and the report cover every point of `cloud`.
 fn report_of(
     path: &Path,
     cloud: &cloud::PointCloud,
@@ -85,14 +86,12 @@ fn report_of(
     models: &[Model],
     cfg: &DetectConfig,
 ) -> Result<FileReport, ExtentError> {
-    let kept = guard(path, cloud, cfg, &ExtentConfig::default())?;
-    let prepared = prepare(&kept.cloud, cfg);
     Ok(FileReport::new(
         path.display().to_string(),
         cloud.len(),
         dropped,
         models,
-        detect_all_prepared(cloud, &prepared, models, cfg),
+        detect_input(path, cloud, models, cfg)?,
     ))
 }
 
@@ -623,19 +622,13 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
         }
     };
     notes(&loaded, &req.file, err);
-    let kept = match guard(
-        &req.file,
-        &loaded.cloud,
-        &req.settings.detect,
-        &ExtentConfig::default(),
-    ) {
-        Ok(k) => k,
+    let prepared = match prepare_guarded(&req.file, &loaded.cloud, &req.settings.detect) {
+        Ok(p) => p,
         Err(e) => {
             let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
             return 2;
         }
     };
-    let prepared = prepare(&kept.cloud, &req.settings.detect);
     let hyps = models
         .first()
         .map(|m| {

@@ -6,6 +6,7 @@ mod batch_under_address_limit;
 mod control_bytes_in_errors;
 mod empty_inputs;
 mod eval_convert_up;
+mod eval_scores_detect;
 mod fine_voxel_budget;
 mod header_count_too_small;
 mod huge_coordinates;
