@@ -517,6 +517,30 @@ const DENSE_CELLS: usize = 1 << 25;
 /// memory stays bounded and only time grows (the values are the same).
 const KEPT_CHUNKS: usize = (512 << 20) / (CHUNK_CELLS * std::mem::size_of::<f32>());
 
+/// Most row ids (`ny * nz`) for which [`DistanceField`] keeps a table from row id to
+/// row (4 bytes each): 2^23, 32 MiB, covers a 160 m x 160 m x 10 m box at 2 cm (a
+/// 1M-point room scan needs about 250 000); a larger box falls back to binary searches
+/// over the sorted rows, with the same answers.
+const ROW_TABLE_ENTRIES: usize = 1 << 23;
+
+/// For sorted row ids `rows` (each below `ids`), the table whose entry `id` (for `id` in
+/// `0..=ids`) is the index of the first row with an id at least `id`; `None` when `ids`
+/// exceeds [`ROW_TABLE_ENTRIES`] or the rows do not fit `u32` indices.
+fn row_table(rows: &[u64], ids: usize) -> Option<Vec<u32>> {
+    if ids > ROW_TABLE_ENTRIES || u32::try_from(rows.len()).is_err() {
+        return None;
+    }
+    let mut table = Vec::with_capacity(ids + 1);
+    let mut r = 0usize;
+    for id in 0..=ids as u64 {
+        while r < rows.len() && rows[r] < id {
+            r += 1;
+        }
+        table.push(r as u32);
+    }
+    Some(table)
+}
+
 /// Euclidean distances from cell centres to the nearest occupied voxel centre, over the
 /// box `min .. min + dims` (grid keys), computed lazily in chunks of [`CHUNK`]^3 cells:
 /// only the chunks queried are ever computed or stored, so memory follows the region the
@@ -534,6 +558,10 @@ struct DistanceField {
     rows: Vec<u64>,
     /// Start of each row's cells in `xs` (one more entry than `rows`).
     row_start: Vec<usize>,
+    /// For every row id `z * ny + y` (and one past the last), the index in `rows` of the
+    /// first row with that id or more: the row lookups without a binary search. `None`
+    /// when the box has more than [`ROW_TABLE_ENTRIES`] rows (then `rows` is searched).
+    row_table: Option<Vec<u32>>,
     /// x offsets of the occupied cells, ascending within each row.
     xs: Vec<u32>,
     /// Chunks per axis.
@@ -586,6 +614,7 @@ impl DistanceField {
             xs.push(x);
         }
         row_start.push(xs.len());
+        let row_table = row_table(&rows, dims[1] * dims[2]);
         let chunk_dims = dims.map(|d| d.div_ceil(CHUNK));
         let slots = if dense.is_some() {
             0
@@ -599,6 +628,7 @@ impl DistanceField {
             voxel: v as f32,
             rows,
             row_start,
+            row_table,
             xs,
             chunk_dims,
             chunks,
@@ -650,15 +680,14 @@ impl DistanceField {
     /// `(y, x offsets)`.
     fn rows_at(&self, z: usize, y0: usize, y1: usize) -> impl Iterator<Item = (usize, &[u32])> {
         let base = (z * self.dims[1]) as u64;
-        let r = self.rows.partition_point(|&id| id < base + y0 as u64);
-        self.rows[r..]
-            .iter()
-            .take_while(move |&&id| id < base + y1 as u64)
-            .enumerate()
-            .map(move |(i, &id)| {
-                let (a, b) = (self.row_start[r + i], self.row_start[r + i + 1]);
-                ((id - base) as usize, &self.xs[a..b])
-            })
+        let (r, end) = (
+            self.first_row(base + y0 as u64),
+            self.first_row(base + y1 as u64),
+        );
+        self.rows[r..end].iter().enumerate().map(move |(i, &id)| {
+            let (a, b) = (self.row_start[r + i], self.row_start[r + i + 1]);
+            ((id - base) as usize, &self.xs[a..b])
+        })
     }
 
     /// The distance of the one cell at offsets `o`, computed alone (as [`Self::get`] gives
@@ -699,9 +728,19 @@ impl DistanceField {
     /// The occupied x offsets of row `(y, z)` (offsets in the box).
     fn row(&self, y: usize, z: usize) -> &[u32] {
         let id = (z * self.dims[1] + y) as u64;
-        match self.rows.binary_search(&id) {
-            Ok(r) => &self.xs[self.row_start[r]..self.row_start[r + 1]],
-            Err(_) => &[],
+        let r = self.first_row(id);
+        match self.rows.get(r) {
+            Some(&found) if found == id => &self.xs[self.row_start[r]..self.row_start[r + 1]],
+            _ => &[],
+        }
+    }
+
+    /// The index in `rows` of the first row whose id is at least `id` (`rows.len()` when
+    /// none is): a look-up in the row table, or a binary search without one.
+    fn first_row(&self, id: u64) -> usize {
+        match &self.row_table {
+            Some(t) => t.get(id as usize).map_or(self.rows.len(), |&r| r as usize),
+            None => self.rows.partition_point(|&r| r < id),
         }
     }
 
@@ -1137,6 +1176,34 @@ mod tests {
                 assert_eq!(seen, inside, "seed {seed}");
             }
         }
+    }
+
+    #[test]
+    fn row_table_equals_the_binary_search() {
+        for (seed, dims, strays) in [(5u64, [40usize, 33, 21], 4usize), (6, [9, 50, 7], 0)] {
+            let keys = random_keys(seed, dims, strays);
+            let field = DistanceField::new([0, 0, 0], dims, &keys, 0.02);
+            assert!(field.row_table.is_some());
+            let ids = (dims[1] * dims[2]) as u64;
+            for id in 0..=ids + 2 {
+                let want = field.rows.partition_point(|&r| r < id);
+                assert_eq!(field.first_row(id), want, "seed {seed} id {id}");
+            }
+            let searched = DistanceField {
+                row_table: None,
+                ..DistanceField::new([0, 0, 0], dims, &keys, 0.02)
+            };
+            for z in 0..dims[2] {
+                for y in 0..dims[1] {
+                    assert_eq!(field.row(y, z), searched.row(y, z));
+                }
+                let a: Vec<_> = field.rows_at(z, 3, dims[1] - 2).collect();
+                let b: Vec<_> = searched.rows_at(z, 3, dims[1] - 2).collect();
+                assert_eq!(a, b, "seed {seed} z {z}");
+            }
+        }
+        assert!(row_table(&[0, 5], ROW_TABLE_ENTRIES + 1).is_none());
+        assert_eq!(row_table(&[1, 3], 4), Some(vec![0, 0, 1, 1, 2]));
     }
 
     #[test]
