@@ -13,8 +13,10 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::OnceLock;
 
+use parry3d::bounding_volume::Aabb;
+
 use nalgebra::{Point3, Vector3};
-use parry3d::math::{IVector, Pose, Rotation, Vector};
+use parry3d::math::{ivect_to_vect, vect_to_ivect, IVector, Pose, Rotation, Vector};
 use parry3d::shape::{Cylinder as ParryCylinder, Voxels};
 
 use crate::cloud::PointCloud;
@@ -37,7 +39,15 @@ pub struct Scene {
     voxel: f64,
     /// World position of the local origin used for f32 geometry.
     origin: Vector3<f64>,
-    voxels: Option<Voxels>,
+    /// Voxel edge (all three axes) in parry's f32, local frame.
+    size: Vector,
+    /// What parry's `Voxels::local_aabb` gives for these voxels (local frame): the union of
+    /// its 8^3-voxel chunks; `None` without voxels.
+    parry_aabb: Option<Aabb>,
+    /// The same voxels as a parry3d `Voxels` shape, built only when
+    /// [`Scene::intersects_parry`] asks for it: [`Scene::intersects`] needs only the
+    /// numbers above, and building the shape is most of the scene's cost on a large floor.
+    voxels: OnceLock<Option<Voxels>>,
     field: Option<DistanceField>,
     floor: bool,
     /// World bounds of the occupied voxels (cube extents included).
@@ -87,7 +97,9 @@ impl Scene {
             return Scene {
                 voxel: v,
                 origin,
-                voxels: None,
+                size: Vector::splat(v as f32),
+                parry_aabb: None,
+                voxels: OnceLock::new(),
                 field: None,
                 floor: cfg.floor,
                 occupied: None,
@@ -102,11 +114,7 @@ impl Scene {
                 hi[a] = hi[a].max(k[a]);
             }
         }
-        let ivs: Vec<IVector> = keys
-            .iter()
-            .map(|k| IVector::new(k[0] as i32, k[1] as i32, k[2] as i32))
-            .collect();
-        let voxels = Voxels::new(Vector::splat(v as f32), &ivs);
+        let size = Vector::splat(v as f32);
         let margin = (cfg.field_margin / v).ceil() as i64;
         let fmin = [lo[0] - margin, lo[1] - margin, lo[2] - margin];
         let dims = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1 + 2 * margin) as usize);
@@ -117,7 +125,9 @@ impl Scene {
         Scene {
             voxel: v,
             origin,
-            voxels: Some(voxels),
+            size,
+            parry_aabb: Some(parry_chunks_aabb(lo, hi, size)),
+            voxels: OnceLock::new(),
             field: Some(field),
             floor: cfg.floor,
             occupied,
@@ -193,7 +203,7 @@ impl Scene {
         if self.floor && floor_gap(c) < 0.0 {
             return true;
         }
-        let (Some(voxels), Some(field)) = (&self.voxels, &self.field) else {
+        let (Some(local_aabb), Some(field)) = (&self.parry_aabb, &self.field) else {
             return false;
         };
         let Some((pose, shape)) = self.parry_cylinder(c) else {
@@ -217,13 +227,12 @@ impl Scene {
         use parry3d::shape::Shape;
         // As parry's `intersection_test` and `intersection_test_voxels_shape` compute them.
         let pos12 = Pose::IDENTITY.inv_mul(&pose);
-        let Some(aabb) = voxels
-            .local_aabb()
-            .intersection(&shape.compute_aabb(&pos12))
-        else {
+        let Some(aabb) = local_aabb.intersection(&shape.compute_aabb(&pos12)) else {
             return false;
         };
-        let [mins, maxs] = voxels.voxel_range_intersecting_local_aabb(&aabb);
+        // `Voxels::voxel_range_intersecting_local_aabb`.
+        let mins = vect_to_ivect((aabb.mins / self.size).floor());
+        let maxs = vect_to_ivect((aabb.maxs / self.size).ceil());
         let lo = [mins.x as i64, mins.y as i64, mins.z as i64];
         let hi = [maxs.x as i64, maxs.y as i64, maxs.z as i64];
         let t = pos12.translation;
@@ -233,10 +242,14 @@ impl Scene {
             Vector3::new(u.x as f64, u.y as f64, u.z as f64),
         );
         let (hh, r) = (shape.half_height as f64, shape.radius as f64);
-        let size = voxels.voxel_size();
+        let size = self.size;
         let half_diag = (size.x as f64).hypot(size.y as f64).hypot(size.z as f64) / 2.0;
-        let centre =
-            |k: [i64; 3]| voxels.voxel_center(IVector::new(k[0] as i32, k[1] as i32, k[2] as i32));
+        // `Voxels::voxel_center`.
+        let centre = |k: [i64; 3]| {
+            (ivect_to_vect(IVector::new(k[0] as i32, k[1] as i32, k[2] as i32))
+                + Vector::splat(0.5))
+                * size
+        };
         // Where the voxel centred at `p` stands against the cylinder.
         let clear2 = (r + half_diag + DECIDE_MARGIN).powi(2);
         let inside2 = (r - DECIDE_MARGIN).max(0.0).powi(2);
@@ -273,7 +286,7 @@ impl Scene {
         if self.floor && floor_gap(c) < 0.0 {
             return true;
         }
-        let Some(voxels) = &self.voxels else {
+        let Some(voxels) = self.parry_voxels() else {
             return false;
         };
         let Some((pose, shape)) = self.parry_cylinder(c) else {
@@ -282,6 +295,26 @@ impl Scene {
         parry3d::query::intersection_test(&Pose::IDENTITY, voxels, &pose, &shape)
             .map(|r| r.intersecting)
             .unwrap_or(false)
+    }
+
+    /// The occupied voxels as a parry3d `Voxels` shape (local frame), built on first use
+    /// from the distance field's rows; `None` without voxels.
+    fn parry_voxels(&self) -> Option<&Voxels> {
+        self.voxels
+            .get_or_init(|| {
+                let field = self.field.as_ref()?;
+                let mut keys = Vec::with_capacity(self.count);
+                field.any_occupied(
+                    field.min,
+                    [0, 1, 2].map(|a| field.min[a] + field.dims[a] as i64),
+                    |k| {
+                        keys.push(IVector::new(k[0] as i32, k[1] as i32, k[2] as i32));
+                        false
+                    },
+                );
+                Some(Voxels::new(self.size, &keys))
+            })
+            .as_ref()
     }
 
     /// The body part as a parry cylinder and its pose in the local (f32) frame; `None` for
@@ -456,6 +489,23 @@ impl Scene {
 /// to be decided without GJK: a thousand times the f32 rounding of room-sized coordinates,
 /// so only voxels that GJK itself would decide the same way are skipped.
 const DECIDE_MARGIN: f64 = 1e-3;
+
+/// Voxels per edge of parry3d's `Voxels` chunks in 3D (`VoxelsChunk::VOXELS_PER_CHUNK_DIM`),
+/// whose union is the shape's `local_aabb`.
+const PARRY_CHUNK: i64 = 8;
+
+/// Parry's `Voxels::local_aabb` for occupied keys spanning `lo ..= hi` (grid keys) with
+/// voxel edge `size` (local frame, metres, f32): the union of the 8^3-voxel chunks that
+/// hold them, computed as parry computes each chunk's box (the same f32 values).
+fn parry_chunks_aabb(lo: [i64; 3], hi: [i64; 3], size: Vector) -> Aabb {
+    let key = |k: [i64; 3]| IVector::new(k[0] as i32, k[1] as i32, k[2] as i32);
+    let mins = lo.map(|l| l.div_euclid(PARRY_CHUNK) * PARRY_CHUNK);
+    let maxs = hi.map(|h| (h.div_euclid(PARRY_CHUNK) + 1) * PARRY_CHUNK);
+    Aabb::new(
+        ivect_to_vect(key(mins)) * size,
+        ivect_to_vect(key(maxs)) * size,
+    )
+}
 
 /// Where a voxel stands against a cylinder, by its centre.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -1284,6 +1334,33 @@ mod tests {
         };
         assert!(s.intersects(&lying));
         assert!((s.clearance(&lying) + 0.01).abs() < 1e-9);
+    }
+
+    #[test]
+    fn chunk_box_equals_parrys_local_aabb() {
+        // Key sets on both sides of zero, on and off chunk boundaries, at several voxel sizes.
+        for (seed, dims, strays) in [(7u64, [20usize, 9, 17], 3usize), (8, [3, 3, 3], 0)] {
+            for (shift, v) in [
+                ([-8i64, 0, 5], 0.02f32),
+                ([-13, -21, -1], 0.05),
+                ([16, 7, -9], 0.003),
+            ] {
+                let keys: Vec<[i64; 3]> = random_keys(seed, dims, strays)
+                    .iter()
+                    .map(|k| [0, 1, 2].map(|a| k[a] + shift[a]))
+                    .collect();
+                let ivs: Vec<IVector> = keys
+                    .iter()
+                    .map(|k| IVector::new(k[0] as i32, k[1] as i32, k[2] as i32))
+                    .collect();
+                let want = Voxels::new(Vector::splat(v), &ivs).local_aabb();
+                let lo = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).min().unwrap());
+                let hi = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).max().unwrap());
+                let got = parry_chunks_aabb(lo, hi, Vector::splat(v));
+                assert_eq!(got.mins.to_array(), want.mins.to_array(), "seed {seed}");
+                assert_eq!(got.maxs.to_array(), want.maxs.to_array(), "seed {seed}");
+            }
+        }
     }
 
     #[test]
