@@ -447,8 +447,10 @@ impl Scene {
             for c in parts.iter() {
                 let g = self.clearance(c);
                 gap = gap.min(g);
-                if g <= 0.0 && !hit && self.intersects(c) {
+                if g <= 0.0 && self.intersects(c) {
+                    // The gap is not used once a part touches: the rest need no test.
                     hit = true;
+                    break;
                 }
             }
             (hit, gap)
@@ -946,13 +948,27 @@ fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
 
 /// [`edt_1d`] written only for the positions `from .. from + d.len()` of `f` (the same
 /// values, bit for bit).
+///
+/// Entries equal to [`FAR`] (no occupied cell on that line of the earlier passes) are left
+/// out of the lower envelope: the transform with them has the same value at every
+/// position (a FAR parabola is never the lowest where a finite one exists, and the
+/// finite ones meet each other where they did), and a line of FAR alone is FAR.
 fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
     let n = f.len();
+    let Some(first) = f.iter().position(|&x| x != FAR) else {
+        for dq in d.iter_mut().take(n - from.min(n)) {
+            *dq = FAR;
+        }
+        return;
+    };
     let mut k = 0usize;
-    v[0] = 0;
+    v[0] = first;
     z[0] = f32::NEG_INFINITY;
     z[1] = f32::INFINITY;
-    for q in 1..n {
+    for q in first + 1..n {
+        if f[q] == FAR {
+            continue;
+        }
         loop {
             let p = v[k];
             let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32))
@@ -1254,6 +1270,80 @@ mod tests {
         }
         assert!(row_table(&[0, 5], ROW_TABLE_ENTRIES + 1).is_none());
         assert_eq!(row_table(&[1, 3], 4), Some(vec![0, 0, 1, 1, 2]));
+    }
+
+    /// The transform as it was before FAR entries were left out of the envelope: every
+    /// entry a parabola.
+    fn edt_1d_with_far_parabolas(f: &[f32], from: usize, d: &mut [f32]) {
+        let n = f.len();
+        let (mut v, mut z) = (vec![0usize; n], vec![0f32; n + 1]);
+        let mut k = 0usize;
+        z[0] = f32::NEG_INFINITY;
+        z[1] = f32::INFINITY;
+        for q in 1..n {
+            loop {
+                let p = v[k];
+                let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32))
+                    / (2.0 * q as f32 - 2.0 * p as f32);
+                if s <= z[k] && k > 0 {
+                    k -= 1;
+                } else if s <= z[k] {
+                    v[0] = q;
+                    z[0] = f32::NEG_INFINITY;
+                    z[1] = f32::INFINITY;
+                    break;
+                } else {
+                    k += 1;
+                    v[k] = q;
+                    z[k] = s;
+                    z[k + 1] = f32::INFINITY;
+                    break;
+                }
+            }
+        }
+        k = 0;
+        for (q, dq) in d.iter_mut().enumerate().take(n - from.min(n)) {
+            let q = q + from;
+            while z[k + 1] < q as f32 {
+                k += 1;
+            }
+            let diff = q as f32 - v[k] as f32;
+            *dq = diff * diff + f[v[k]];
+        }
+    }
+
+    #[test]
+    fn leaving_far_entries_out_changes_no_bit() {
+        let mut state = 99u64;
+        let mut next = |n: usize| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) as usize) % n.max(1)
+        };
+        for case in 0..3000 {
+            let n = 1 + next(if case % 10 == 0 { 600 } else { 90 });
+            // Runs of FAR (empty rows) between squared distances, as the earlier passes leave.
+            let far_share = next(10);
+            let f: Vec<f32> = (0..n)
+                .map(|_| {
+                    if next(10) < far_share {
+                        FAR
+                    } else {
+                        let r = next(if case % 3 == 0 { 4 } else { 400 });
+                        (r * r) as f32
+                    }
+                })
+                .collect();
+            let from = next(n);
+            let len = next(n - from + 1);
+            let (mut want, mut got) = (vec![-1f32; len], vec![-1f32; len]);
+            edt_1d_with_far_parabolas(&f, from, &mut want);
+            let (mut v, mut z) = (vec![0usize; n], vec![0f32; n + 1]);
+            edt_1d_range(&f, from, &mut got, &mut v, &mut z);
+            let bits = |x: &[f32]| x.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&got), bits(&want), "case {case}: {f:?} from {from}");
+        }
     }
 
     #[test]
