@@ -623,9 +623,10 @@ struct DistanceField {
     chunks: Vec<OnceLock<Box<[f32]>>>,
     /// Chunks computed and kept so far.
     kept: AtomicUsize,
-    /// The distances (metres) of a box of at most [`DENSE_CELLS`], all computed at once,
-    /// laid out `(y * nz + z) * nx + x`; `None` for a larger box (then `chunks` holds them).
-    dense: Option<Vec<f32>>,
+    /// The distances of a box of at most [`DENSE_CELLS`]: its first two passes computed
+    /// at once, the last one in tiles of columns where asked; `None` for a larger box (then
+    /// `chunks` holds them).
+    dense: Option<dense::Columns>,
 }
 
 impl DistanceField {
@@ -646,7 +647,7 @@ impl DistanceField {
         let cells = dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
         let dense = cells
             .is_some_and(|n| n <= dense_cells)
-            .then(|| dense::dense_distances(min, dims, keys, v));
+            .then(|| dense::Columns::new(min, dims, keys, v));
         let ny = dims[1] as u64;
         let mut cells: Vec<(u64, u32)> = keys
             .iter()
@@ -707,8 +708,7 @@ impl DistanceField {
     fn get(&self, k: [i64; 3]) -> Option<f32> {
         let o = self.offsets(k)?;
         if let Some(d) = &self.dense {
-            let [nx, _, nz] = self.dims;
-            return Some(d[(o[1] * nz + o[2]) * nx + o[0]]);
+            return Some(d.get(o));
         }
         let c = o.map(|i| i / CHUNK);
         let [cnx, cny, _] = self.chunk_dims;
@@ -1008,16 +1008,133 @@ mod dense {
     //! for bit.
     use super::*;
 
+    /// Edge of a tile of columns, cells: the unit in which the last pass (along z) is
+    /// computed and kept. 8 x 8 columns (0.16 m square at 2 cm) is finer than a limb, so
+    /// little is computed that no body asks for, and coarse enough that the tiles' slots
+    /// (one `OnceLock` each) cost nothing beside the grid.
+    const TILE: usize = 8;
+
+    /// The exact distance field of a box of at most [`DENSE_CELLS`]: the first two passes
+    /// of the transform (along x, then y) over the whole box, and the last one (along z,
+    /// which reads only its own column) per tile of [`TILE`] x [`TILE`] columns, on first
+    /// use. Every value equals [`dense_distances`] of the box, bit for bit.
+    #[derive(Debug)]
+    pub(super) struct Columns {
+        /// Cells along x, y, z.
+        dims: [usize; 3],
+        /// Voxel edge, metres, in the precision of the stored distances.
+        voxel: f32,
+        /// Squared distances (cells) after the passes along x and y, z-major
+        /// (`(z * ny + y) * nx + x`).
+        planes: Vec<f32>,
+        /// Tiles along x.
+        tiles_x: usize,
+        /// Distances (metres) per tile (`ty * tiles_x + tx`), laid out
+        /// `(z * TILE + y) * TILE + x` within it; computed on first use.
+        tiles: Vec<OnceLock<Box<[f32]>>>,
+    }
+
+    impl Columns {
+        /// The first two passes over the box `min .. min + dims` of the occupied voxel
+        /// `keys`, voxel edge `v` metres.
+        pub(super) fn new(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]], v: f64) -> Columns {
+            let tiles_x = dims[0].div_ceil(TILE);
+            let tiles = (0..tiles_x * dims[1].div_ceil(TILE))
+                .map(|_| OnceLock::new())
+                .collect();
+            Columns {
+                dims,
+                voxel: v as f32,
+                planes: planes(min, dims, keys),
+                tiles_x,
+                tiles,
+            }
+        }
+
+        /// The distance (metres) at offsets `o` (inside the box).
+        pub(super) fn get(&self, o: [usize; 3]) -> f32 {
+            let (tx, ty) = (o[0] / TILE, o[1] / TILE);
+            let tile = self.tiles[ty * self.tiles_x + tx].get_or_init(|| self.tile(tx, ty));
+            tile[(o[2] * TILE + o[1] % TILE) * TILE + o[0] % TILE]
+        }
+
+        /// The last pass over the columns of tile `(tx, ty)`.
+        fn tile(&self, tx: usize, ty: usize) -> Box<[f32]> {
+            let [nx, ny, nz] = self.dims;
+            let mut out = vec![f32::INFINITY; nz * TILE * TILE].into_boxed_slice();
+            let (mut f, mut d) = (vec![0f32; nz], vec![0f32; nz]);
+            let (mut vs, mut zs) = (vec![0usize; nz], vec![0f32; nz + 1]);
+            for y in ty * TILE..((ty + 1) * TILE).min(ny) {
+                for x in tx * TILE..((tx + 1) * TILE).min(nx) {
+                    for (z, fz) in f.iter_mut().enumerate() {
+                        *fz = self.planes[(z * ny + y) * nx + x];
+                    }
+                    edt_1d(&f, &mut d, &mut vs, &mut zs);
+                    for (z, &q) in d.iter().enumerate() {
+                        out[(z * TILE + y % TILE) * TILE + x % TILE] = distance(q, self.voxel);
+                    }
+                }
+            }
+            out
+        }
+    }
+
+    /// Metres from a squared distance in cells `q` (at least `FAR / 2`: none, infinite).
+    fn distance(q: f32, voxel: f32) -> f32 {
+        if q >= FAR / 2.0 {
+            f32::INFINITY
+        } else {
+            q.sqrt() * voxel
+        }
+    }
+
     /// Exact Euclidean distance transform (Felzenszwalb and Huttenlocher, 2012) of the
-    /// occupied voxel `keys`, in metres. Lines along each axis are transformed in parallel;
-    /// the result is stored y-major (`(y * nz + z) * nx + x`), the layout the last pass
-    /// writes.
+    /// occupied voxel `keys`, in metres, all at once: the reference [`Columns`] equals.
+    /// Lines along each axis are transformed in parallel; the result is stored y-major
+    /// (`(y * nz + z) * nx + x`), the layout the last pass writes.
+    #[cfg(test)]
     pub(super) fn dense_distances(
         min: [i64; 3],
         dims: [usize; 3],
         keys: &[[i64; 3]],
         v: f64,
     ) -> Vec<f32> {
+        use rayon::prelude::*;
+        let [nx, ny, nz] = dims;
+        let d = planes(min, dims, keys);
+        let longest = nx.max(ny).max(nz);
+        let scratch = || {
+            (
+                vec![0f32; longest],
+                vec![0f32; longest],
+                vec![0usize; longest],
+                vec![0f32; longest + 1],
+            )
+        };
+        // Along z: read the z-major grid, write one y-major plane per y.
+        let src = &d;
+        let mut dist = vec![0f32; nx * ny * nz];
+        dist.par_chunks_mut(nx * nz).enumerate().for_each_init(
+            scratch,
+            |(f, out, vs, zs), (y, plane)| {
+                for x in 0..nx {
+                    for z in 0..nz {
+                        f[z] = src[(z * ny + y) * nx + x];
+                    }
+                    edt_1d(&f[..nz], &mut out[..nz], vs, zs);
+                    for z in 0..nz {
+                        plane[z * nx + x] = distance(out[z], v as f32);
+                    }
+                }
+            },
+        );
+        dist
+    }
+
+    /// The first two passes of the transform (along x, then y) of the occupied voxel
+    /// `keys` over the box `min .. min + dims`: squared distances in cells, z-major
+    /// (`(z * ny + y) * nx + x`), [`FAR`] where a slab has no occupied cell.
+    fn planes(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]]) -> Vec<f32> {
         use rayon::prelude::*;
         let [nx, ny, nz] = dims;
         // Squared distances in cells, z-major (`(z * ny + y) * nx + x`) for the first passes.
@@ -1063,29 +1180,7 @@ mod dense {
                     }
                 }
             });
-        // Along z: read the z-major grid, write one y-major plane per y.
-        let src = &d;
-        let mut dist = vec![0f32; nx * ny * nz];
-        dist.par_chunks_mut(nx * nz).enumerate().for_each_init(
-            scratch,
-            |(f, out, vs, zs), (y, plane)| {
-                for x in 0..nx {
-                    for z in 0..nz {
-                        f[z] = src[(z * ny + y) * nx + x];
-                    }
-                    edt_1d(&f[..nz], &mut out[..nz], vs, zs);
-                    for z in 0..nz {
-                        let q = out[z];
-                        plane[z * nx + x] = if q >= FAR / 2.0 {
-                            f32::INFINITY
-                        } else {
-                            q.sqrt() * v as f32
-                        };
-                    }
-                }
-            },
-        );
-        dist
+        d
     }
 
     /// Squared distances (in cells) along a row of 0 (occupied) and FAR cells to its nearest
@@ -1204,8 +1299,16 @@ mod tests {
             let field = DistanceField::with_dense_limit(min, dims, &keys, 0.02, 0);
             assert!(field.dense.is_none());
             let whole = DistanceField::new(min, dims, &keys, 0.02);
-            assert_eq!(whole.dense.as_deref(), Some(&want[..]));
             let [nx, ny, nz] = dims;
+            let columns = whole.dense.as_ref().unwrap();
+            for y in 0..ny {
+                for z in 0..nz {
+                    for x in 0..nx {
+                        let w = want[(y * nz + z) * nx + x];
+                        assert_eq!(columns.get([x, y, z]).to_bits(), w.to_bits(), "seed {seed}");
+                    }
+                }
+            }
             for y in 0..ny {
                 for z in 0..nz {
                     for x in 0..nx {
