@@ -57,7 +57,8 @@ pub struct Scene {
 
 /// Bytes the distance field of a scene spanning `extent` (metres along x, y, z, the
 /// occupied voxels' span) takes at most while a body moves within a cube of edge `reach`
-/// metres: a box of at most [`DENSE_CELLS`] is computed at once; a larger one takes one
+/// metres: a box of at most [`DENSE_CELLS`] has its first two passes computed at once and
+/// its last pass in tiles of columns where asked (at most two f32 grids); a larger one takes one
 /// chunk slot per chunk of its box and the chunks covering that cube (an upper bound, in
 /// f64 so any extent gives a number). Chunks beyond the cube are
 /// computed only where bodies elsewhere ask for them (at most [`KEPT_CHUNKS`] kept).
@@ -67,7 +68,7 @@ pub fn field_bytes(extent: [f64; 3], cfg: &SceneConfig, reach: f64) -> f64 {
     let dims = extent.map(|e| (e / v).floor() + 2.0 + margin);
     let cells: f64 = dims.iter().product();
     if cells <= DENSE_CELLS as f64 {
-        // Computed at once: two f32 grids while the transform runs.
+        // The first two passes' grid, and the last pass's tiles: at most a second grid.
         return cells * 2.0 * std::mem::size_of::<f32>() as f64;
     }
     let chunks: f64 = dims.iter().map(|d| (d / CHUNK as f64).ceil()).product();
@@ -559,8 +560,8 @@ const FIRST_PAD: usize = CHUNK / 4;
 const PAD_GROWTH: usize = 4;
 /// Squared distance (cells) standing for "no occupied cell in reach" in the passes.
 const FAR: f32 = 1e20;
-/// Largest field box (cells) whose distances are computed at once, densely (8 bytes a cell
-/// while computed, 4 kept): 2^25 cells, 256 MiB, a 1M-point room scan at 2 cm; there one
+/// Largest field box (cells) whose first two passes are computed at once, densely (4 bytes
+/// a cell, and up to 4 more for the last pass's tiles where bodies ask): 2^25 cells, 256 MiB, a 1M-point room scan at 2 cm; there one
 /// pass over the box costs about a third of the instructions of computing its chunks with
 /// their borders. Larger boxes are computed in chunks where they are used.
 const DENSE_CELLS: usize = 1 << 25;
@@ -1003,9 +1004,10 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
 }
 
 mod dense {
-    //! The dense exact transform over the whole box, for boxes small enough to hold at
-    //! once ([`DENSE_CELLS`]): faster than chunks there; the chunked field equals it bit
-    //! for bit.
+    //! The dense exact transform, for boxes small enough to hold at once
+    //! ([`DENSE_CELLS`]): the passes along x and y over the whole box, the pass along z
+    //! per tile of columns where asked; faster than chunks there; the chunked field equals
+    //! it bit for bit.
     use super::*;
 
     /// Edge of a tile of columns, cells: the unit in which the last pass (along z) is
@@ -1090,8 +1092,7 @@ mod dense {
 
     /// Exact Euclidean distance transform (Felzenszwalb and Huttenlocher, 2012) of the
     /// occupied voxel `keys`, in metres, all at once: the reference [`Columns`] equals.
-    /// Lines along each axis are transformed in parallel; the result is stored y-major
-    /// (`(y * nz + z) * nx + x`), the layout the last pass writes.
+    /// The result is stored y-major (`(y * nz + z) * nx + x`).
     #[cfg(test)]
     pub(super) fn dense_distances(
         min: [i64; 3],
@@ -1099,35 +1100,23 @@ mod dense {
         keys: &[[i64; 3]],
         v: f64,
     ) -> Vec<f32> {
-        use rayon::prelude::*;
         let [nx, ny, nz] = dims;
         let d = planes(min, dims, keys);
-        let longest = nx.max(ny).max(nz);
-        let scratch = || {
-            (
-                vec![0f32; longest],
-                vec![0f32; longest],
-                vec![0usize; longest],
-                vec![0f32; longest + 1],
-            )
-        };
-        // Along z: read the z-major grid, write one y-major plane per y.
-        let src = &d;
+        // Along z, column by column: write one y-major plane per y.
+        let (mut f, mut out) = (vec![0f32; nz], vec![0f32; nz]);
+        let (mut vs, mut zs) = (vec![0usize; nz], vec![0f32; nz + 1]);
         let mut dist = vec![0f32; nx * ny * nz];
-        dist.par_chunks_mut(nx * nz).enumerate().for_each_init(
-            scratch,
-            |(f, out, vs, zs), (y, plane)| {
-                for x in 0..nx {
-                    for z in 0..nz {
-                        f[z] = src[(z * ny + y) * nx + x];
-                    }
-                    edt_1d(&f[..nz], &mut out[..nz], vs, zs);
-                    for z in 0..nz {
-                        plane[z * nx + x] = distance(out[z], v as f32);
-                    }
+        for y in 0..ny {
+            for x in 0..nx {
+                for (z, fz) in f.iter_mut().enumerate() {
+                    *fz = d[(z * ny + y) * nx + x];
                 }
-            },
-        );
+                edt_1d(&f, &mut out, &mut vs, &mut zs);
+                for (z, &q) in out.iter().enumerate() {
+                    dist[(y * nz + z) * nx + x] = distance(q, v as f32);
+                }
+            }
+        }
         dist
     }
 
@@ -1375,43 +1364,17 @@ mod tests {
         assert_eq!(row_table(&[1, 3], 4), Some(vec![0, 0, 1, 1, 2]));
     }
 
-    /// The transform as it was before FAR entries were left out of the envelope: every
-    /// entry a parabola.
-    fn edt_1d_with_far_parabolas(f: &[f32], from: usize, d: &mut [f32]) {
-        let n = f.len();
-        let (mut v, mut z) = (vec![0usize; n], vec![0f32; n + 1]);
-        let mut k = 0usize;
-        z[0] = f32::NEG_INFINITY;
-        z[1] = f32::INFINITY;
-        for q in 1..n {
-            loop {
-                let p = v[k];
-                let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32))
-                    / (2.0 * q as f32 - 2.0 * p as f32);
-                if s <= z[k] && k > 0 {
-                    k -= 1;
-                } else if s <= z[k] {
-                    v[0] = q;
-                    z[0] = f32::NEG_INFINITY;
-                    z[1] = f32::INFINITY;
-                    break;
-                } else {
-                    k += 1;
-                    v[k] = q;
-                    z[k] = s;
-                    z[k + 1] = f32::INFINITY;
-                    break;
-                }
-            }
-        }
-        k = 0;
-        for (q, dq) in d.iter_mut().enumerate().take(n - from.min(n)) {
-            let q = q + from;
-            while z[k + 1] < q as f32 {
-                k += 1;
-            }
-            let diff = q as f32 - v[k] as f32;
-            *dq = diff * diff + f[v[k]];
+    /// The transform by brute force: at each position the least of every entry's parabola
+    /// (FAR ones included), in the same f32 arithmetic; exact, as the squared distances
+    /// are small integers.
+    fn edt_1d_brute(f: &[f32], from: usize, d: &mut [f32]) {
+        for (q, dq) in d.iter_mut().enumerate() {
+            let q = (q + from) as f32;
+            *dq = f
+                .iter()
+                .enumerate()
+                .map(|(p, fp)| (q - p as f32) * (q - p as f32) + fp)
+                .fold(f32::INFINITY, f32::min);
         }
     }
 
@@ -1441,7 +1404,7 @@ mod tests {
             let from = next(n);
             let len = next(n - from + 1);
             let (mut want, mut got) = (vec![-1f32; len], vec![-1f32; len]);
-            edt_1d_with_far_parabolas(&f, from, &mut want);
+            edt_1d_brute(&f, from, &mut want);
             let (mut v, mut z) = (vec![0usize; n], vec![0f32; n + 1]);
             edt_1d_range(&f, from, &mut got, &mut v, &mut z);
             let bits = |x: &[f32]| x.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
