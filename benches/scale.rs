@@ -8,9 +8,11 @@
 //!
 //! Every stage alone (PLY read, height map, hypotheses, scene, the distance field over
 //! the whole occupied box, fitting, unfolding, segmentation) and the default run end to
-//! end (sitting and lying, one shared scene). The scene stage only voxelises: the field's
-//! chunks are computed where the fits first ask for them, so `fit_*` includes them
-//! (each `fit_*` iteration builds its own scene) and `field_all` measures them all.
+//! end (sitting and lying, one shared scene). The scene stage voxelises and, for a box
+//! of at most 2^25 cells, runs the field's passes along x and y; the pass along z (per
+//! tile of columns) or, for a larger box, the field's chunks are computed where the fits
+//! first ask for them, so `fit_*` includes them (each `fit_*` iteration builds its own
+//! scene) and `field_all` measures them all.
 //! Run with `nice -n 19 cargo bench --bench scale` (add a scene name to filter, e.g.
 //! `cargo bench --bench scale -- room_view`).
 

@@ -7,7 +7,7 @@ use nalgebra::Point3;
 
 use crate::method::hypotheses::Hypothesis;
 use crate::method::scene::Scene;
-use crate::model::agent::{Agent, Cylinder, Placement, Posture};
+use crate::model::agent::{Agent, Cylinder, FkCache, Placement, Posture};
 use crate::model::hierarchy::Hierarchy;
 
 /// The agent resting at a hypothesis in its initial pose.
@@ -130,9 +130,9 @@ fn fit_headings(
             yaw,
         };
         let mut parts: Vec<Cylinder> = Vec::new();
-        let mut f = Vec::new();
+        let (mut f, mut cache) = (Vec::new(), FkCache::default());
         let mut pose = |t: f64, out: &mut Vec<Cylinder>| {
-            agent.forward_kinematics(&at(start_z - t * drop), posture, &mut f);
+            agent.forward_kinematics_cached(&at(start_z - t * drop), posture, &mut cache, &mut f);
             *out = agent.cylinders(&f, |j| !unchecked.contains(&j));
         };
         pose(0.0, &mut parts);

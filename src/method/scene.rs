@@ -13,8 +13,10 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::OnceLock;
 
+use parry3d::bounding_volume::Aabb;
+
 use nalgebra::{Point3, Vector3};
-use parry3d::math::{IVector, Pose, Rotation, Vector};
+use parry3d::math::{ivect_to_vect, vect_to_ivect, IVector, Pose, Rotation, Vector};
 use parry3d::shape::{Cylinder as ParryCylinder, Voxels};
 
 use crate::cloud::PointCloud;
@@ -37,7 +39,15 @@ pub struct Scene {
     voxel: f64,
     /// World position of the local origin used for f32 geometry.
     origin: Vector3<f64>,
-    voxels: Option<Voxels>,
+    /// Voxel edge (all three axes) in parry's f32, local frame.
+    size: Vector,
+    /// What parry's `Voxels::local_aabb` gives for these voxels (local frame): the union of
+    /// its 8^3-voxel chunks; `None` without voxels.
+    parry_aabb: Option<Aabb>,
+    /// The same voxels as a parry3d `Voxels` shape, built only when
+    /// [`Scene::intersects_parry`] asks for it: [`Scene::intersects`] needs only the
+    /// numbers above, and building the shape is most of the scene's cost on a large floor.
+    voxels: OnceLock<Option<Voxels>>,
     field: Option<DistanceField>,
     floor: bool,
     /// World bounds of the occupied voxels (cube extents included).
@@ -47,7 +57,8 @@ pub struct Scene {
 
 /// Bytes the distance field of a scene spanning `extent` (metres along x, y, z, the
 /// occupied voxels' span) takes at most while a body moves within a cube of edge `reach`
-/// metres: a box of at most [`DENSE_CELLS`] is computed at once; a larger one takes one
+/// metres: a box of at most [`DENSE_CELLS`] has its first two passes computed at once and
+/// its last pass in tiles of columns where asked (at most two f32 grids); a larger one takes one
 /// chunk slot per chunk of its box and the chunks covering that cube (an upper bound, in
 /// f64 so any extent gives a number). Chunks beyond the cube are
 /// computed only where bodies elsewhere ask for them (at most [`KEPT_CHUNKS`] kept).
@@ -57,7 +68,7 @@ pub fn field_bytes(extent: [f64; 3], cfg: &SceneConfig, reach: f64) -> f64 {
     let dims = extent.map(|e| (e / v).floor() + 2.0 + margin);
     let cells: f64 = dims.iter().product();
     if cells <= DENSE_CELLS as f64 {
-        // Computed at once: two f32 grids while the transform runs.
+        // The first two passes' grid, and the last pass's tiles: at most a second grid.
         return cells * 2.0 * std::mem::size_of::<f32>() as f64;
     }
     let chunks: f64 = dims.iter().map(|d| (d / CHUNK as f64).ceil()).product();
@@ -87,7 +98,9 @@ impl Scene {
             return Scene {
                 voxel: v,
                 origin,
-                voxels: None,
+                size: Vector::splat(v as f32),
+                parry_aabb: None,
+                voxels: OnceLock::new(),
                 field: None,
                 floor: cfg.floor,
                 occupied: None,
@@ -102,11 +115,7 @@ impl Scene {
                 hi[a] = hi[a].max(k[a]);
             }
         }
-        let ivs: Vec<IVector> = keys
-            .iter()
-            .map(|k| IVector::new(k[0] as i32, k[1] as i32, k[2] as i32))
-            .collect();
-        let voxels = Voxels::new(Vector::splat(v as f32), &ivs);
+        let size = Vector::splat(v as f32);
         let margin = (cfg.field_margin / v).ceil() as i64;
         let fmin = [lo[0] - margin, lo[1] - margin, lo[2] - margin];
         let dims = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1 + 2 * margin) as usize);
@@ -117,7 +126,9 @@ impl Scene {
         Scene {
             voxel: v,
             origin,
-            voxels: Some(voxels),
+            size,
+            parry_aabb: Some(parry_chunks_aabb(lo, hi, size)),
+            voxels: OnceLock::new(),
             field: Some(field),
             floor: cfg.floor,
             occupied,
@@ -193,7 +204,7 @@ impl Scene {
         if self.floor && floor_gap(c) < 0.0 {
             return true;
         }
-        let (Some(voxels), Some(field)) = (&self.voxels, &self.field) else {
+        let (Some(local_aabb), Some(field)) = (&self.parry_aabb, &self.field) else {
             return false;
         };
         let Some((pose, shape)) = self.parry_cylinder(c) else {
@@ -217,13 +228,12 @@ impl Scene {
         use parry3d::shape::Shape;
         // As parry's `intersection_test` and `intersection_test_voxels_shape` compute them.
         let pos12 = Pose::IDENTITY.inv_mul(&pose);
-        let Some(aabb) = voxels
-            .local_aabb()
-            .intersection(&shape.compute_aabb(&pos12))
-        else {
+        let Some(aabb) = local_aabb.intersection(&shape.compute_aabb(&pos12)) else {
             return false;
         };
-        let [mins, maxs] = voxels.voxel_range_intersecting_local_aabb(&aabb);
+        // `Voxels::voxel_range_intersecting_local_aabb`.
+        let mins = vect_to_ivect((aabb.mins / self.size).floor());
+        let maxs = vect_to_ivect((aabb.maxs / self.size).ceil());
         let lo = [mins.x as i64, mins.y as i64, mins.z as i64];
         let hi = [maxs.x as i64, maxs.y as i64, maxs.z as i64];
         let t = pos12.translation;
@@ -233,10 +243,14 @@ impl Scene {
             Vector3::new(u.x as f64, u.y as f64, u.z as f64),
         );
         let (hh, r) = (shape.half_height as f64, shape.radius as f64);
-        let size = voxels.voxel_size();
+        let size = self.size;
         let half_diag = (size.x as f64).hypot(size.y as f64).hypot(size.z as f64) / 2.0;
-        let centre =
-            |k: [i64; 3]| voxels.voxel_center(IVector::new(k[0] as i32, k[1] as i32, k[2] as i32));
+        // `Voxels::voxel_center`.
+        let centre = |k: [i64; 3]| {
+            (ivect_to_vect(IVector::new(k[0] as i32, k[1] as i32, k[2] as i32))
+                + Vector::splat(0.5))
+                * size
+        };
         // Where the voxel centred at `p` stands against the cylinder.
         let clear2 = (r + half_diag + DECIDE_MARGIN).powi(2);
         let inside2 = (r - DECIDE_MARGIN).max(0.0).powi(2);
@@ -273,7 +287,7 @@ impl Scene {
         if self.floor && floor_gap(c) < 0.0 {
             return true;
         }
-        let Some(voxels) = &self.voxels else {
+        let Some(voxels) = self.parry_voxels() else {
             return false;
         };
         let Some((pose, shape)) = self.parry_cylinder(c) else {
@@ -282,6 +296,26 @@ impl Scene {
         parry3d::query::intersection_test(&Pose::IDENTITY, voxels, &pose, &shape)
             .map(|r| r.intersecting)
             .unwrap_or(false)
+    }
+
+    /// The occupied voxels as a parry3d `Voxels` shape (local frame), built on first use
+    /// from the distance field's rows; `None` without voxels.
+    fn parry_voxels(&self) -> Option<&Voxels> {
+        self.voxels
+            .get_or_init(|| {
+                let field = self.field.as_ref()?;
+                let mut keys = Vec::with_capacity(self.count);
+                field.any_occupied(
+                    field.min,
+                    [0, 1, 2].map(|a| field.min[a] + field.dims[a] as i64),
+                    |k| {
+                        keys.push(IVector::new(k[0] as i32, k[1] as i32, k[2] as i32));
+                        false
+                    },
+                );
+                Some(Voxels::new(self.size, &keys))
+            })
+            .as_ref()
     }
 
     /// The body part as a parry cylinder and its pose in the local (f32) frame; `None` for
@@ -414,8 +448,10 @@ impl Scene {
             for c in parts.iter() {
                 let g = self.clearance(c);
                 gap = gap.min(g);
-                if g <= 0.0 && !hit && self.intersects(c) {
+                if g <= 0.0 && self.intersects(c) {
+                    // The gap is not used once a part touches: the rest need no test.
                     hit = true;
+                    break;
                 }
             }
             (hit, gap)
@@ -456,6 +492,23 @@ impl Scene {
 /// to be decided without GJK: a thousand times the f32 rounding of room-sized coordinates,
 /// so only voxels that GJK itself would decide the same way are skipped.
 const DECIDE_MARGIN: f64 = 1e-3;
+
+/// Voxels per edge of parry3d's `Voxels` chunks in 3D (`VoxelsChunk::VOXELS_PER_CHUNK_DIM`),
+/// whose union is the shape's `local_aabb`.
+const PARRY_CHUNK: i64 = 8;
+
+/// Parry's `Voxels::local_aabb` for occupied keys spanning `lo ..= hi` (grid keys) with
+/// voxel edge `size` (local frame, metres, f32): the union of the 8^3-voxel chunks that
+/// hold them, computed as parry computes each chunk's box (the same f32 values).
+fn parry_chunks_aabb(lo: [i64; 3], hi: [i64; 3], size: Vector) -> Aabb {
+    let key = |k: [i64; 3]| IVector::new(k[0] as i32, k[1] as i32, k[2] as i32);
+    let mins = lo.map(|l| l.div_euclid(PARRY_CHUNK) * PARRY_CHUNK);
+    let maxs = hi.map(|h| (h.div_euclid(PARRY_CHUNK) + 1) * PARRY_CHUNK);
+    Aabb::new(
+        ivect_to_vect(key(mins)) * size,
+        ivect_to_vect(key(maxs)) * size,
+    )
+}
 
 /// Where a voxel stands against a cylinder, by its centre.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -507,8 +560,8 @@ const FIRST_PAD: usize = CHUNK / 4;
 const PAD_GROWTH: usize = 4;
 /// Squared distance (cells) standing for "no occupied cell in reach" in the passes.
 const FAR: f32 = 1e20;
-/// Largest field box (cells) whose distances are computed at once, densely (8 bytes a cell
-/// while computed, 4 kept): 2^25 cells, 256 MiB, a 1M-point room scan at 2 cm; there one
+/// Largest field box (cells) whose first two passes are computed at once, densely (4 bytes
+/// a cell, and up to 4 more for the last pass's tiles where bodies ask): 2^25 cells, 256 MiB, a 1M-point room scan at 2 cm; there one
 /// pass over the box costs about a third of the instructions of computing its chunks with
 /// their borders. Larger boxes are computed in chunks where they are used.
 const DENSE_CELLS: usize = 1 << 25;
@@ -516,6 +569,30 @@ const DENSE_CELLS: usize = 1 << 25;
 /// about a fifth of that; past it, distances are computed cell by cell and not kept, so
 /// memory stays bounded and only time grows (the values are the same).
 const KEPT_CHUNKS: usize = (512 << 20) / (CHUNK_CELLS * std::mem::size_of::<f32>());
+
+/// Most row ids (`ny * nz`) for which [`DistanceField`] keeps a table from row id to
+/// row (4 bytes each): 2^23, 32 MiB, covers a 160 m x 160 m x 10 m box at 2 cm (a
+/// 1M-point room scan needs about 250 000); a larger box falls back to binary searches
+/// over the sorted rows, with the same answers.
+const ROW_TABLE_ENTRIES: usize = 1 << 23;
+
+/// For sorted row ids `rows` (each below `ids`), the table whose entry `id` (for `id` in
+/// `0..=ids`) is the index of the first row with an id at least `id`; `None` when `ids`
+/// exceeds [`ROW_TABLE_ENTRIES`] or the rows do not fit `u32` indices.
+fn row_table(rows: &[u64], ids: usize) -> Option<Vec<u32>> {
+    if ids > ROW_TABLE_ENTRIES || u32::try_from(rows.len()).is_err() {
+        return None;
+    }
+    let mut table = Vec::with_capacity(ids + 1);
+    let mut r = 0usize;
+    for id in 0..=ids as u64 {
+        while r < rows.len() && rows[r] < id {
+            r += 1;
+        }
+        table.push(r as u32);
+    }
+    Some(table)
+}
 
 /// Euclidean distances from cell centres to the nearest occupied voxel centre, over the
 /// box `min .. min + dims` (grid keys), computed lazily in chunks of [`CHUNK`]^3 cells:
@@ -534,6 +611,10 @@ struct DistanceField {
     rows: Vec<u64>,
     /// Start of each row's cells in `xs` (one more entry than `rows`).
     row_start: Vec<usize>,
+    /// For every row id `z * ny + y` (and one past the last), the index in `rows` of the
+    /// first row with that id or more: the row lookups without a binary search. `None`
+    /// when the box has more than [`ROW_TABLE_ENTRIES`] rows (then `rows` is searched).
+    row_table: Option<Vec<u32>>,
     /// x offsets of the occupied cells, ascending within each row.
     xs: Vec<u32>,
     /// Chunks per axis.
@@ -543,9 +624,10 @@ struct DistanceField {
     chunks: Vec<OnceLock<Box<[f32]>>>,
     /// Chunks computed and kept so far.
     kept: AtomicUsize,
-    /// The distances (metres) of a box of at most [`DENSE_CELLS`], all computed at once,
-    /// laid out `(y * nz + z) * nx + x`; `None` for a larger box (then `chunks` holds them).
-    dense: Option<Vec<f32>>,
+    /// The distances of a box of at most [`DENSE_CELLS`]: its first two passes computed
+    /// at once, the last one in tiles of columns where asked; `None` for a larger box (then
+    /// `chunks` holds them).
+    dense: Option<dense::Columns>,
 }
 
 impl DistanceField {
@@ -566,7 +648,7 @@ impl DistanceField {
         let cells = dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
         let dense = cells
             .is_some_and(|n| n <= dense_cells)
-            .then(|| dense::dense_distances(min, dims, keys, v));
+            .then(|| dense::Columns::new(min, dims, keys, v));
         let ny = dims[1] as u64;
         let mut cells: Vec<(u64, u32)> = keys
             .iter()
@@ -586,6 +668,7 @@ impl DistanceField {
             xs.push(x);
         }
         row_start.push(xs.len());
+        let row_table = row_table(&rows, dims[1] * dims[2]);
         let chunk_dims = dims.map(|d| d.div_ceil(CHUNK));
         let slots = if dense.is_some() {
             0
@@ -599,6 +682,7 @@ impl DistanceField {
             voxel: v as f32,
             rows,
             row_start,
+            row_table,
             xs,
             chunk_dims,
             chunks,
@@ -625,8 +709,7 @@ impl DistanceField {
     fn get(&self, k: [i64; 3]) -> Option<f32> {
         let o = self.offsets(k)?;
         if let Some(d) = &self.dense {
-            let [nx, _, nz] = self.dims;
-            return Some(d[(o[1] * nz + o[2]) * nx + o[0]]);
+            return Some(d.get(o));
         }
         let c = o.map(|i| i / CHUNK);
         let [cnx, cny, _] = self.chunk_dims;
@@ -650,15 +733,14 @@ impl DistanceField {
     /// `(y, x offsets)`.
     fn rows_at(&self, z: usize, y0: usize, y1: usize) -> impl Iterator<Item = (usize, &[u32])> {
         let base = (z * self.dims[1]) as u64;
-        let r = self.rows.partition_point(|&id| id < base + y0 as u64);
-        self.rows[r..]
-            .iter()
-            .take_while(move |&&id| id < base + y1 as u64)
-            .enumerate()
-            .map(move |(i, &id)| {
-                let (a, b) = (self.row_start[r + i], self.row_start[r + i + 1]);
-                ((id - base) as usize, &self.xs[a..b])
-            })
+        let (r, end) = (
+            self.first_row(base + y0 as u64),
+            self.first_row(base + y1 as u64),
+        );
+        self.rows[r..end].iter().enumerate().map(move |(i, &id)| {
+            let (a, b) = (self.row_start[r + i], self.row_start[r + i + 1]);
+            ((id - base) as usize, &self.xs[a..b])
+        })
     }
 
     /// The distance of the one cell at offsets `o`, computed alone (as [`Self::get`] gives
@@ -699,9 +781,19 @@ impl DistanceField {
     /// The occupied x offsets of row `(y, z)` (offsets in the box).
     fn row(&self, y: usize, z: usize) -> &[u32] {
         let id = (z * self.dims[1] + y) as u64;
-        match self.rows.binary_search(&id) {
-            Ok(r) => &self.xs[self.row_start[r]..self.row_start[r + 1]],
-            Err(_) => &[],
+        let r = self.first_row(id);
+        match self.rows.get(r) {
+            Some(&found) if found == id => &self.xs[self.row_start[r]..self.row_start[r + 1]],
+            _ => &[],
+        }
+    }
+
+    /// The index in `rows` of the first row whose id is at least `id` (`rows.len()` when
+    /// none is): a look-up in the row table, or a binary search without one.
+    fn first_row(&self, id: u64) -> usize {
+        match &self.row_table {
+            Some(t) => t.get(id as usize).map_or(self.rows.len(), |&r| r as usize),
+            None => self.rows.partition_point(|&r| r < id),
         }
     }
 
@@ -857,13 +949,27 @@ fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
 
 /// [`edt_1d`] written only for the positions `from .. from + d.len()` of `f` (the same
 /// values, bit for bit).
+///
+/// Entries equal to [`FAR`] (no occupied cell on that line of the earlier passes) are left
+/// out of the lower envelope: the transform with them has the same value at every
+/// position (a FAR parabola is never the lowest where a finite one exists, and the
+/// finite ones meet each other where they did), and a line of FAR alone is FAR.
 fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
     let n = f.len();
+    let Some(first) = f.iter().position(|&x| x != FAR) else {
+        for dq in d.iter_mut().take(n - from.min(n)) {
+            *dq = FAR;
+        }
+        return;
+    };
     let mut k = 0usize;
-    v[0] = 0;
+    v[0] = first;
     z[0] = f32::NEG_INFINITY;
     z[1] = f32::INFINITY;
-    for q in 1..n {
+    for q in first + 1..n {
+        if f[q] == FAR {
+            continue;
+        }
         loop {
             let p = v[k];
             let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32))
@@ -898,21 +1004,126 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
 }
 
 mod dense {
-    //! The dense exact transform over the whole box, for boxes small enough to hold at
-    //! once ([`DENSE_CELLS`]): faster than chunks there; the chunked field equals it bit
-    //! for bit.
+    //! The dense exact transform, for boxes small enough to hold at once
+    //! ([`DENSE_CELLS`]): the passes along x and y over the whole box, the pass along z
+    //! per tile of columns where asked; faster than chunks there; the chunked field equals
+    //! it bit for bit.
     use super::*;
 
+    /// Edge of a tile of columns, cells: the unit in which the last pass (along z) is
+    /// computed and kept. 8 x 8 columns (0.16 m square at 2 cm) is finer than a limb, so
+    /// little is computed that no body asks for, and coarse enough that the tiles' slots
+    /// (one `OnceLock` each) cost nothing beside the grid.
+    const TILE: usize = 8;
+
+    /// The exact distance field of a box of at most [`DENSE_CELLS`]: the first two passes
+    /// of the transform (along x, then y) over the whole box, and the last one (along z,
+    /// which reads only its own column) per tile of [`TILE`] x [`TILE`] columns, on first
+    /// use. Every value equals [`dense_distances`] of the box, bit for bit.
+    #[derive(Debug)]
+    pub(super) struct Columns {
+        /// Cells along x, y, z.
+        dims: [usize; 3],
+        /// Voxel edge, metres, in the precision of the stored distances.
+        voxel: f32,
+        /// Squared distances (cells) after the passes along x and y, z-major
+        /// (`(z * ny + y) * nx + x`).
+        planes: Vec<f32>,
+        /// Tiles along x.
+        tiles_x: usize,
+        /// Distances (metres) per tile (`ty * tiles_x + tx`), laid out
+        /// `(z * TILE + y) * TILE + x` within it; computed on first use.
+        tiles: Vec<OnceLock<Box<[f32]>>>,
+    }
+
+    impl Columns {
+        /// The first two passes over the box `min .. min + dims` of the occupied voxel
+        /// `keys`, voxel edge `v` metres.
+        pub(super) fn new(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]], v: f64) -> Columns {
+            let tiles_x = dims[0].div_ceil(TILE);
+            let tiles = (0..tiles_x * dims[1].div_ceil(TILE))
+                .map(|_| OnceLock::new())
+                .collect();
+            Columns {
+                dims,
+                voxel: v as f32,
+                planes: planes(min, dims, keys),
+                tiles_x,
+                tiles,
+            }
+        }
+
+        /// The distance (metres) at offsets `o` (inside the box).
+        pub(super) fn get(&self, o: [usize; 3]) -> f32 {
+            let (tx, ty) = (o[0] / TILE, o[1] / TILE);
+            let tile = self.tiles[ty * self.tiles_x + tx].get_or_init(|| self.tile(tx, ty));
+            tile[(o[2] * TILE + o[1] % TILE) * TILE + o[0] % TILE]
+        }
+
+        /// The last pass over the columns of tile `(tx, ty)`.
+        fn tile(&self, tx: usize, ty: usize) -> Box<[f32]> {
+            let [nx, ny, nz] = self.dims;
+            let mut out = vec![f32::INFINITY; nz * TILE * TILE].into_boxed_slice();
+            let (mut f, mut d) = (vec![0f32; nz], vec![0f32; nz]);
+            let (mut vs, mut zs) = (vec![0usize; nz], vec![0f32; nz + 1]);
+            for y in ty * TILE..((ty + 1) * TILE).min(ny) {
+                for x in tx * TILE..((tx + 1) * TILE).min(nx) {
+                    for (z, fz) in f.iter_mut().enumerate() {
+                        *fz = self.planes[(z * ny + y) * nx + x];
+                    }
+                    edt_1d(&f, &mut d, &mut vs, &mut zs);
+                    for (z, &q) in d.iter().enumerate() {
+                        out[(z * TILE + y % TILE) * TILE + x % TILE] = distance(q, self.voxel);
+                    }
+                }
+            }
+            out
+        }
+    }
+
+    /// Metres from a squared distance in cells `q` (at least `FAR / 2`: none, infinite).
+    fn distance(q: f32, voxel: f32) -> f32 {
+        if q >= FAR / 2.0 {
+            f32::INFINITY
+        } else {
+            q.sqrt() * voxel
+        }
+    }
+
     /// Exact Euclidean distance transform (Felzenszwalb and Huttenlocher, 2012) of the
-    /// occupied voxel `keys`, in metres. Lines along each axis are transformed in parallel;
-    /// the result is stored y-major (`(y * nz + z) * nx + x`), the layout the last pass
-    /// writes.
+    /// occupied voxel `keys`, in metres, all at once: the reference [`Columns`] equals.
+    /// The result is stored y-major (`(y * nz + z) * nx + x`).
+    #[cfg(test)]
     pub(super) fn dense_distances(
         min: [i64; 3],
         dims: [usize; 3],
         keys: &[[i64; 3]],
         v: f64,
     ) -> Vec<f32> {
+        let [nx, ny, nz] = dims;
+        let d = planes(min, dims, keys);
+        // Along z, column by column: write one y-major plane per y.
+        let (mut f, mut out) = (vec![0f32; nz], vec![0f32; nz]);
+        let (mut vs, mut zs) = (vec![0usize; nz], vec![0f32; nz + 1]);
+        let mut dist = vec![0f32; nx * ny * nz];
+        for y in 0..ny {
+            for x in 0..nx {
+                for (z, fz) in f.iter_mut().enumerate() {
+                    *fz = d[(z * ny + y) * nx + x];
+                }
+                edt_1d(&f, &mut out, &mut vs, &mut zs);
+                for (z, &q) in out.iter().enumerate() {
+                    dist[(y * nz + z) * nx + x] = distance(q, v as f32);
+                }
+            }
+        }
+        dist
+    }
+
+    /// The first two passes of the transform (along x, then y) of the occupied voxel
+    /// `keys` over the box `min .. min + dims`: squared distances in cells, z-major
+    /// (`(z * ny + y) * nx + x`), [`FAR`] where a slab has no occupied cell.
+    fn planes(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]]) -> Vec<f32> {
         use rayon::prelude::*;
         let [nx, ny, nz] = dims;
         // Squared distances in cells, z-major (`(z * ny + y) * nx + x`) for the first passes.
@@ -958,29 +1169,7 @@ mod dense {
                     }
                 }
             });
-        // Along z: read the z-major grid, write one y-major plane per y.
-        let src = &d;
-        let mut dist = vec![0f32; nx * ny * nz];
-        dist.par_chunks_mut(nx * nz).enumerate().for_each_init(
-            scratch,
-            |(f, out, vs, zs), (y, plane)| {
-                for x in 0..nx {
-                    for z in 0..nz {
-                        f[z] = src[(z * ny + y) * nx + x];
-                    }
-                    edt_1d(&f[..nz], &mut out[..nz], vs, zs);
-                    for z in 0..nz {
-                        let q = out[z];
-                        plane[z * nx + x] = if q >= FAR / 2.0 {
-                            f32::INFINITY
-                        } else {
-                            q.sqrt() * v as f32
-                        };
-                    }
-                }
-            },
-        );
-        dist
+        d
     }
 
     /// Squared distances (in cells) along a row of 0 (occupied) and FAR cells to its nearest
@@ -1099,8 +1288,16 @@ mod tests {
             let field = DistanceField::with_dense_limit(min, dims, &keys, 0.02, 0);
             assert!(field.dense.is_none());
             let whole = DistanceField::new(min, dims, &keys, 0.02);
-            assert_eq!(whole.dense.as_deref(), Some(&want[..]));
             let [nx, ny, nz] = dims;
+            let columns = whole.dense.as_ref().unwrap();
+            for y in 0..ny {
+                for z in 0..nz {
+                    for x in 0..nx {
+                        let w = want[(y * nz + z) * nx + x];
+                        assert_eq!(columns.get([x, y, z]).to_bits(), w.to_bits(), "seed {seed}");
+                    }
+                }
+            }
             for y in 0..ny {
                 for z in 0..nz {
                     for x in 0..nx {
@@ -1136,6 +1333,82 @@ mod tests {
                     .collect();
                 assert_eq!(seen, inside, "seed {seed}");
             }
+        }
+    }
+
+    #[test]
+    fn row_table_equals_the_binary_search() {
+        for (seed, dims, strays) in [(5u64, [40usize, 33, 21], 4usize), (6, [9, 50, 7], 0)] {
+            let keys = random_keys(seed, dims, strays);
+            let field = DistanceField::new([0, 0, 0], dims, &keys, 0.02);
+            assert!(field.row_table.is_some());
+            let ids = (dims[1] * dims[2]) as u64;
+            for id in 0..=ids + 2 {
+                let want = field.rows.partition_point(|&r| r < id);
+                assert_eq!(field.first_row(id), want, "seed {seed} id {id}");
+            }
+            let searched = DistanceField {
+                row_table: None,
+                ..DistanceField::new([0, 0, 0], dims, &keys, 0.02)
+            };
+            for z in 0..dims[2] {
+                for y in 0..dims[1] {
+                    assert_eq!(field.row(y, z), searched.row(y, z));
+                }
+                let a: Vec<_> = field.rows_at(z, 3, dims[1] - 2).collect();
+                let b: Vec<_> = searched.rows_at(z, 3, dims[1] - 2).collect();
+                assert_eq!(a, b, "seed {seed} z {z}");
+            }
+        }
+        assert!(row_table(&[0, 5], ROW_TABLE_ENTRIES + 1).is_none());
+        assert_eq!(row_table(&[1, 3], 4), Some(vec![0, 0, 1, 1, 2]));
+    }
+
+    /// The transform by brute force: at each position the least of every entry's parabola
+    /// (FAR ones included), in the same f32 arithmetic; exact, as the squared distances
+    /// are small integers.
+    fn edt_1d_brute(f: &[f32], from: usize, d: &mut [f32]) {
+        for (q, dq) in d.iter_mut().enumerate() {
+            let q = (q + from) as f32;
+            *dq = f
+                .iter()
+                .enumerate()
+                .map(|(p, fp)| (q - p as f32) * (q - p as f32) + fp)
+                .fold(f32::INFINITY, f32::min);
+        }
+    }
+
+    #[test]
+    fn leaving_far_entries_out_changes_no_bit() {
+        let mut state = 99u64;
+        let mut next = |n: usize| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) as usize) % n.max(1)
+        };
+        for case in 0..3000 {
+            let n = 1 + next(if case % 10 == 0 { 600 } else { 90 });
+            // Runs of FAR (empty rows) between squared distances, as the earlier passes leave.
+            let far_share = next(10);
+            let f: Vec<f32> = (0..n)
+                .map(|_| {
+                    if next(10) < far_share {
+                        FAR
+                    } else {
+                        let r = next(if case % 3 == 0 { 4 } else { 400 });
+                        (r * r) as f32
+                    }
+                })
+                .collect();
+            let from = next(n);
+            let len = next(n - from + 1);
+            let (mut want, mut got) = (vec![-1f32; len], vec![-1f32; len]);
+            edt_1d_brute(&f, from, &mut want);
+            let (mut v, mut z) = (vec![0usize; n], vec![0f32; n + 1]);
+            edt_1d_range(&f, from, &mut got, &mut v, &mut z);
+            let bits = |x: &[f32]| x.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&got), bits(&want), "case {case}: {f:?} from {from}");
         }
     }
 
@@ -1217,6 +1490,33 @@ mod tests {
         };
         assert!(s.intersects(&lying));
         assert!((s.clearance(&lying) + 0.01).abs() < 1e-9);
+    }
+
+    #[test]
+    fn chunk_box_equals_parrys_local_aabb() {
+        // Key sets on both sides of zero, on and off chunk boundaries, at several voxel sizes.
+        for (seed, dims, strays) in [(7u64, [20usize, 9, 17], 3usize), (8, [3, 3, 3], 0)] {
+            for (shift, v) in [
+                ([-8i64, 0, 5], 0.02f32),
+                ([-13, -21, -1], 0.05),
+                ([16, 7, -9], 0.003),
+            ] {
+                let keys: Vec<[i64; 3]> = random_keys(seed, dims, strays)
+                    .iter()
+                    .map(|k| [0, 1, 2].map(|a| k[a] + shift[a]))
+                    .collect();
+                let ivs: Vec<IVector> = keys
+                    .iter()
+                    .map(|k| IVector::new(k[0] as i32, k[1] as i32, k[2] as i32))
+                    .collect();
+                let want = Voxels::new(Vector::splat(v), &ivs).local_aabb();
+                let lo = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).min().unwrap());
+                let hi = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).max().unwrap());
+                let got = parry_chunks_aabb(lo, hi, Vector::splat(v));
+                assert_eq!(got.mins.to_array(), want.mins.to_array(), "seed {seed}");
+                assert_eq!(got.maxs.to_array(), want.maxs.to_array(), "seed {seed}");
+            }
+        }
     }
 
     #[test]

@@ -12,7 +12,7 @@
 
 use crate::method::fit::{ContactConfig, Fit};
 use crate::method::scene::Scene;
-use crate::model::agent::{Agent, Cylinder, Placement, Posture};
+use crate::model::agent::{Agent, Cylinder, FkCache, Placement, Posture};
 use crate::model::hierarchy::{Fallback, Hierarchy, Node, Spread};
 
 /// The outcome of one node.
@@ -341,10 +341,10 @@ impl NodeContext<'_> {
             .sum();
         // Only the branch's joints move; they are rewritten at every step.
         let mut p = posture.clone();
-        let mut frames = Vec::new();
+        let (mut frames, mut cache) = (Vec::new(), FkCache::default());
         let mut motion = |t: f64, out: &mut Vec<Cylinder>| {
             self.at(branch, t, &mut p);
-            agent.forward_kinematics(self.place, &p, &mut frames);
+            agent.forward_kinematics_cached(self.place, &p, &mut cache, &mut frames);
             *out = agent.cylinders(&frames, |j| links.contains(&j));
             for c in out.iter_mut() {
                 if let Some(k) = node.links.iter().position(|&l| l == c.joint) {

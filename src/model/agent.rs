@@ -106,6 +106,22 @@ pub struct Placement {
     pub yaw: f64,
 }
 
+/// What [`Agent::forward_kinematics_cached`] keeps between calls: the placement and the
+/// base frame it gave, each joint's local transform with the axis and angle (as bits) it
+/// was built from, and which frames the last call rebuilt. Belongs to one agent and one
+/// `frames` vector.
+#[derive(Debug, Clone, Default)]
+pub struct FkCache {
+    /// Bits of the last placement's x, y, z (metres) and yaw (radians).
+    place: Option<[u64; 4]>,
+    /// The root's parent frame for that placement (world).
+    base: Isometry3<f64>,
+    /// Per joint: bits of axis x, y, z and angle, and the local transform (parent frame).
+    locals: Vec<Option<([u64; 4], Isometry3<f64>)>>,
+    /// Per joint: whether the last call rebuilt its frame.
+    changed: Vec<bool>,
+}
+
 /// The state of every joint: angle (radians) and axis (unit, parent frame).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Posture {
@@ -451,6 +467,70 @@ impl Agent {
         }
     }
 
+    /// [`Self::forward_kinematics`] for a motion that changes few inputs between calls
+    /// (lowering the agent changes only the placement, a sweep only a branch's angles):
+    /// the same frames, bit for bit, but a joint's rotation is rebuilt only when its axis
+    /// or angle changed, and its frame only when that or its parent's frame changed.
+    /// `cache` holds what the previous call computed; start with `FkCache::default()`.
+    pub fn forward_kinematics_cached(
+        &self,
+        place: &Placement,
+        posture: &Posture,
+        cache: &mut FkCache,
+        frames: &mut Vec<Isometry3<f64>>,
+    ) {
+        let n = self.joints.len();
+        let place_key = [
+            place.position.x.to_bits(),
+            place.position.y.to_bits(),
+            place.position.z.to_bits(),
+            place.yaw.to_bits(),
+        ];
+        let base_changed = cache.place != Some(place_key) || frames.len() != n;
+        if base_changed {
+            cache.place = Some(place_key);
+            cache.base = Isometry3::from_parts(
+                Translation3::from(place.position.coords),
+                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), place.yaw),
+            );
+        }
+        if cache.locals.len() != n || frames.len() != n {
+            cache.locals = vec![None; n];
+            cache.changed = vec![true; n];
+            frames.clear();
+            frames.resize(n, Isometry3::identity());
+        }
+        for (i, j) in self.joints.iter().enumerate() {
+            let axis = &posture.axes[i];
+            let key = [
+                axis.x.to_bits(),
+                axis.y.to_bits(),
+                axis.z.to_bits(),
+                posture.angles[i].to_bits(),
+            ];
+            let local_changed = match &cache.locals[i] {
+                Some((k, _)) => *k != key,
+                None => true,
+            };
+            if local_changed {
+                let local = Isometry3::from_parts(
+                    Translation3::from(j.origin),
+                    UnitQuaternion::from_axis_angle(axis, posture.angles[i]),
+                );
+                cache.locals[i] = Some((key, local));
+            }
+            let parent_changed = j.parent.map_or(base_changed, |p| cache.changed[p]);
+            let changed = local_changed || parent_changed;
+            cache.changed[i] = changed;
+            if changed {
+                let parent = j.parent.map_or(cache.base, |p| frames[p]);
+                if let Some((_, local)) = &cache.locals[i] {
+                    frames[i] = parent * local;
+                }
+            }
+        }
+    }
+
     /// The posed body parts (world frame) of the joints selected by `which`.
     pub fn cylinders(
         &self,
@@ -610,6 +690,48 @@ link = { name = "shank", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius 
         let a = leg(2.0);
         assert_eq!(a.joints[1].origin, Vector3::new(0.0, 0.0, -0.5));
         assert!((a.joints[0].link.as_ref().unwrap().radius - 0.08).abs() < 1e-12);
+    }
+
+    #[test]
+    fn cached_forward_kinematics_equals_the_full_one_bit_for_bit() {
+        let a = Agent::from_toml(builtin("human"), Path::new("human.toml"), 1.75).unwrap();
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut posture = a.rest_posture();
+        let mut place = Placement {
+            position: Point3::new(1.0, -2.0, 0.5),
+            yaw: 0.3,
+        };
+        let (mut cache, mut cached, mut full) = (FkCache::default(), Vec::new(), Vec::new());
+        for step in 0..400 {
+            // Now the placement moves, now one joint turns, now a joint's axis changes,
+            // now nothing changes: the motions the fit and the sweeps make.
+            match step % 4 {
+                0 => place.position.z -= rnd() * 0.01,
+                1 => {
+                    let j = (rnd() * a.joints.len() as f64) as usize % a.joints.len();
+                    posture.angles[j] = rnd() * 3.0 - 1.5;
+                }
+                2 if rnd() < 0.3 => {
+                    let j = (rnd() * a.joints.len() as f64) as usize % a.joints.len();
+                    posture.axes[j] = Unit::new_normalize(Vector3::new(rnd(), rnd(), 0.5));
+                }
+                _ if rnd() < 0.2 => place.yaw = rnd() * 6.0,
+                _ => {}
+            }
+            a.forward_kinematics(&place, &posture, &mut full);
+            a.forward_kinematics_cached(&place, &posture, &mut cache, &mut cached);
+            assert_eq!(cached.len(), full.len());
+            for (c, f) in cached.iter().zip(&full) {
+                let bits = |m: &Isometry3<f64>| m.to_homogeneous().map(f64::to_bits);
+                assert_eq!(bits(c), bits(f), "step {step}");
+            }
+        }
     }
 
     #[test]
