@@ -9,7 +9,8 @@ use afford::detect::{detect, DetectConfig, Outcome};
 use afford::mesh::{Mesh, Part};
 use afford::model::agent::Agent;
 use afford::model::hierarchy::Hierarchy;
-use afford_synth::*;
+use afford_synth::camera;
+use afford_synth::furniture::*;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
 fn models(height: f64) -> (Agent, Hierarchy) {

@@ -14,7 +14,7 @@ use crate::run::{
     DetectRequest, EvalRequest, InspectRequest, Outcome, StdoutError, SynthRequest,
 };
 use crate::settings::Settings;
-use afford::cloud::{parse_matrix, FloorMode, FrameOptions, Units, Up};
+use afford::cloud::frame::{parse_matrix, FloorMode, FrameOptions, Units, Up};
 use afford::input::InputOptions;
 use afford::model::set::ModelChoice;
 use anyhow::{bail, Context};

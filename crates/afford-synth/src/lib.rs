@@ -12,5 +12,3 @@ pub mod dataset;
 pub mod furniture;
 pub mod scenes;
 pub mod wide;
-
-pub use furniture::*;

@@ -13,7 +13,7 @@
 use nalgebra::Point3;
 
 use super::camera::{render_view, Camera};
-use super::*;
+use crate::furniture::*;
 use afford::cloud::PointCloud;
 use afford::mesh::Mesh;
 

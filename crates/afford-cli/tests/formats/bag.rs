@@ -6,7 +6,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use afford::cloud::pointcloud2::encode_cdr;
-use afford::cloud::{read_parts, Pick, SourceOptions};
+use afford::cloud::source::{read_parts, Pick, SourceOptions};
 use mcap::{Channel, Message, Schema, WriteOptions};
 use nalgebra::Point3;
 
