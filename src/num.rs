@@ -17,6 +17,22 @@ pub(crate) fn to_usize(x: f64) -> usize {
     x as usize
 }
 
+/// [`to_usize`] for a count a file declares as a number (a PLY list length), already
+/// checked to be a whole number of at most 32 bits.
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+#[inline]
+pub(crate) fn to_u64(x: f64) -> u64 {
+    // Saturating by the definition of `as` (see the function's doc).
+    x as u64
+}
+
+/// A count declared by a file (`u64`) as the size of a preallocation, capped at `cap`:
+/// the memory follows what is read, not what a header says.
+#[inline]
+pub(crate) fn capacity(count: u64, cap: usize) -> usize {
+    usize::try_from(count).map_or(cap, |n| n.min(cap))
+}
+
 /// A signed grid index or cell offset from a float the caller has rounded. Saturates as
 /// [`to_usize`]: after the extent guard (|coordinate| at most 1e7 m, cells of at least
 /// 2 mm) an index is below 2^33, far inside `i64`.

@@ -17,6 +17,7 @@ use std::borrow::Cow;
 use super::{CloudError, PointCloud};
 use crate::mesh::ply::{parse_mesh_ply, MeshError};
 use crate::mesh::{sample_surface, Mesh, Part};
+use crate::num::capacity;
 
 /// [`sample_mesh`] never draws more than about this many points: a higher density is
 /// lowered to fit.
@@ -148,7 +149,7 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>, CloudError> {
     if len > MAX_MESH_BYTES {
         return Err(too_big());
     }
-    let mut bytes = Vec::with_capacity(len as usize);
+    let mut bytes = Vec::with_capacity(capacity(len, usize::MAX));
     f.by_ref()
         .take(MAX_MESH_BYTES)
         .read_to_end(&mut bytes)
@@ -205,6 +206,13 @@ fn push_vertex(mesh: &mut Mesh, p: Point3<f64>, path: &Path, at: &str) -> Result
     }
     mesh.vertices.push(p);
     Ok(())
+}
+
+/// A vertex index as a triangle holds it (`u32`). Every index is below the vertex count,
+/// which [`push_vertex`] keeps under `u32::MAX` (a binary STL within [`MAX_MESH_BYTES`]
+/// has at most 64 million vertices), so the saturation never happens.
+fn index<T: TryInto<u32>>(i: T) -> u32 {
+    i.try_into().unwrap_or(u32::MAX)
 }
 
 /// Adds the triangle fan of a polygon (indices already checked).
@@ -295,7 +303,7 @@ fn parse_obj(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
                 ),
             ));
         }
-        let poly: Vec<u32> = poly.iter().map(|&i| i as u32).collect();
+        let poly: Vec<u32> = poly.iter().map(|&i| index(i)).collect();
         push_fan(&mut mesh, &poly);
     }
     if mesh.triangles.is_empty() {
@@ -428,7 +436,7 @@ fn parse_off(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
         let mut poly = Vec::with_capacity(n);
         for t in &toks[1..=n] {
             match t.parse::<usize>() {
-                Ok(i) if i < nv => poly.push(i as u32),
+                Ok(i) if i < nv => poly.push(index(i)),
                 _ => {
                     return Err(body_err(
                         path,
@@ -451,7 +459,7 @@ fn parse_stl(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
         let n = u32::from_le_bytes(bytes[80..84].try_into().expect("4 bytes")) as u64;
         let expected = 84 + 50 * n;
         if expected == bytes.len() as u64 {
-            return parse_stl_binary(bytes, n as usize, path);
+            return parse_stl_binary(bytes, capacity(n, usize::MAX), path);
         }
         let ascii = bytes.trim_ascii_start().starts_with(b"solid")
             && !bytes[..bytes.len().min(4096)].contains(&0);
@@ -510,7 +518,7 @@ fn parse_stl_binary(bytes: &[u8], n: usize, path: &Path) -> Result<Mesh, CloudEr
                 }
                 *v = f as f64;
             }
-            *slot = mesh.vertices.len() as u32;
+            *slot = index(mesh.vertices.len());
             mesh.vertices.push(Point3::from(xyz));
         }
         mesh.triangles.push(corner);
@@ -544,7 +552,7 @@ fn parse_stl_ascii(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
                 let x = coord(toks.next(), path, line)?;
                 let y = coord(toks.next(), path, line)?;
                 let z = coord(toks.next(), path, line)?;
-                poly.push(mesh.vertices.len() as u32);
+                poly.push(index(mesh.vertices.len()));
                 push_vertex(&mut mesh, Point3::new(x, y, z), path, &at())?;
             }
             "endloop" => {
@@ -586,6 +594,8 @@ fn parse_stl_ascii(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
 /// takes at least one byte), so that a lying header cannot make the reader loop or
 /// allocate for long.
 #[cfg(test)]
+// Test data: small literals and lengths, written into the fields of a file by hand.
+#[allow(clippy::cast_possible_truncation)]
 mod tests {
     use super::*;
 
