@@ -33,6 +33,15 @@ pub(crate) fn capacity(count: u64, cap: usize) -> usize {
     usize::try_from(count).map_or(cap, |n| n.min(cap))
 }
 
+/// A vertex index as a triangle holds it (`u32`), saturating. Every index is below its
+/// mesh's vertex count, which the mesh readers keep under `u32::MAX` (a mesh file is at
+/// most 1 GiB; `cloud::mesh` checks the count), and the meshes built in code (furniture,
+/// posed agents) have thousands, so the saturation never happens.
+#[inline]
+pub(crate) fn index32<T: TryInto<u32>>(i: T) -> u32 {
+    i.try_into().unwrap_or(u32::MAX)
+}
+
 /// A signed grid index or cell offset from a float the caller has rounded. Saturates as
 /// [`to_usize`]: after the extent guard (|coordinate| at most 1e7 m, cells of at least
 /// 2 mm) an index is below 2^33, far inside `i64`.

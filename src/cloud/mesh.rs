@@ -17,7 +17,7 @@ use std::borrow::Cow;
 use super::{CloudError, PointCloud};
 use crate::mesh::ply::{parse_mesh_ply, MeshError};
 use crate::mesh::{sample_surface, Mesh, Part};
-use crate::num::capacity;
+use crate::num::{capacity, index32 as index};
 
 /// [`sample_mesh`] never draws more than about this many points: a higher density is
 /// lowered to fit.
@@ -206,13 +206,6 @@ fn push_vertex(mesh: &mut Mesh, p: Point3<f64>, path: &Path, at: &str) -> Result
     }
     mesh.vertices.push(p);
     Ok(())
-}
-
-/// A vertex index as a triangle holds it (`u32`). Every index is below the vertex count,
-/// which [`push_vertex`] keeps under `u32::MAX` (a binary STL within [`MAX_MESH_BYTES`]
-/// has at most 64 million vertices), so the saturation never happens.
-fn index<T: TryInto<u32>>(i: T) -> u32 {
-    i.try_into().unwrap_or(u32::MAX)
 }
 
 /// Adds the triangle fan of a polygon (indices already checked).

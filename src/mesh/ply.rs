@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::Point3;
 
 use super::{Mesh, Part};
+use crate::num::{index32, to_usize};
 
 /// What went wrong reading a mesh file.
 #[derive(Debug, thiserror::Error)]
@@ -113,10 +114,14 @@ pub fn parse_mesh_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
                         if !(0.0..=1e6).contains(&n) {
                             return Err(err(format!("bad list length {n}")));
                         }
-                        for _ in 0..n as usize {
+                        for _ in 0..to_usize(n) {
                             let v = next(item)?;
                             if e.name == "face" {
-                                face.push(v as usize);
+                                // An index is a whole number from 0: `as` would read -1 as 0.
+                                if !(v >= 0.0 && v.fract() == 0.0) {
+                                    return Err(err(format!("bad face index {v}")));
+                                }
+                                face.push(to_usize(v));
                             }
                         }
                     }
@@ -146,7 +151,7 @@ pub fn parse_mesh_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
         }
         for k in 1..f.len().saturating_sub(1) {
             mesh.triangles
-                .push([f[0] as u32, f[k] as u32, f[k + 1] as u32]);
+                .push([index32(f[0]), index32(f[k]), index32(f[k + 1])]);
             mesh.parts.push(Part::Other);
         }
     }
