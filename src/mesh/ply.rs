@@ -163,6 +163,23 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_negative_or_fractional_face_index_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        for (bad, says) in [("-1", "bad face index -1"), ("1.5", "bad face index 1.5")] {
+            let ascii = format!(
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\
+                 property float y\nproperty float z\n\
+                 element face 1\nproperty list uchar float vertex_indices\nend_header\n\
+                 0 0 0\n1 0 0\n1 1 0\n3 {bad} 1 2\n"
+            );
+            let p = dir.path().join("a.ply");
+            std::fs::write(&p, ascii).unwrap();
+            let e = read_mesh_ply(&p).unwrap_err().to_string();
+            assert!(e.contains(says), "{e}");
+        }
+    }
+
+    #[test]
     fn reads_ascii_and_binary_quads_as_triangles() {
         let dir = tempfile::tempdir().unwrap();
         let ascii = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n\
