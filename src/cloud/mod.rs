@@ -2,10 +2,6 @@
 //!
 //! Every cloud handed to the detector is in metres, z up, with the floor at z = 0.
 
-// Each `as` that may drop bits here says why it cannot (the workspace lints do not ask it
-// yet of every module).
-#![warn(clippy::cast_possible_truncation)]
-
 use std::path::{Path, PathBuf};
 
 use nalgebra::Point3;

@@ -4,10 +4,6 @@
 //! the initial [`fit`] (4.2); [`unfold`] (4.3, 4.4); [`select`] (4.5).
 //! [`crate::detect`] runs them in this order.
 
-// Each `as` that may drop bits here says why it cannot (the workspace lints do not ask it
-// yet of every module).
-#![warn(clippy::cast_possible_truncation)]
-
 pub mod extent;
 pub mod fit;
 pub mod fuzzy;

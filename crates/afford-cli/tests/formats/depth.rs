@@ -30,7 +30,10 @@ fn a_depth_png_gives_the_detections_of_its_points_as_ply() {
             if let Some(hit) = bvh.cast(&cam.position, &world.normalize()) {
                 let z = hit.t / c.norm();
                 if z < 6.0 {
-                    depth[(v * W + u) as usize] = (z * 1000.0).round() as u16;
+                    // Under 6 m: at most 6000 mm, a u16.
+                    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+                    let mm = (z * 1000.0).round() as u16;
+                    depth[(v * W + u) as usize] = mm;
                 }
             }
         }
