@@ -10,7 +10,7 @@ use afford::method::heightmap::HeightMap;
 use afford::method::hypotheses::hypotheses;
 use afford::method::scene::Scene;
 use afford::model::set::load_models;
-use afford_synth::{scene_cloud, sofa, SofaParams};
+use afford_synth::furniture::{scene_cloud, sofa, SofaParams};
 use criterion::{criterion_group, criterion_main, Criterion};
 
 fn stages(c: &mut Criterion) {

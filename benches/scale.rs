@@ -119,6 +119,8 @@ fn stages(c: &mut Criterion) {
 }
 
 /// Points every `step` metres over the bounding box of `cloud` (world frame).
+// A lattice over a speed scene (tens of metres at centimetre steps): counts far inside usize.
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
 fn field_lattice(
     cloud: &afford::cloud::PointCloud,
     step: f64,

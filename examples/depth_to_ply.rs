@@ -130,14 +130,21 @@ fn write_preview(path: &Path, w: usize, h: usize, z: &[f64]) -> Result<()> {
         .map(|&v| {
             if v > 0.0 {
                 let t = ((v - lo) / (hi - lo).max(1e-6)).clamp(0.0, 1.0);
-                (40.0 + 215.0 * (1.0 - t)) as u8
+                // t is clamped to 0..=1: the grey is in 40..=255.
+                #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+                let grey = (40.0 + 215.0 * (1.0 - t)) as u8;
+                grey
             } else {
                 0
             }
         })
         .collect();
     let file = std::fs::File::create(path).with_context(|| format!("{}", path.display()))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w as u32, h as u32);
+    let (w, h) = (
+        u32::try_from(w).context("image width")?,
+        u32::try_from(h).context("image height")?,
+    );
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
     enc.set_color(png::ColorType::Grayscale);
     enc.set_depth(png::BitDepth::Eight);
     enc.write_header()?.write_image_data(&px)?;

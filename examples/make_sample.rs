@@ -1,6 +1,6 @@
 //! Writes data/sample/room.ply: an armchair, a chair at a table, a stool against a wall and
 //! a three-seat sofa, sampled from their surfaces (the committed sample of README).
-use afford_synth::*;
+use afford_synth::furniture::*;
 fn main() {
     let s = StoolParams::default();
     let meshes = vec![

@@ -8,7 +8,8 @@ use std::path::Path;
 
 use nalgebra::{Matrix4, Point3};
 
-use crate::cloud::{keep_finite, FrameOptions, FrameReport};
+use crate::cloud::frame::{FrameOptions, FrameReport};
+use crate::cloud::keep_finite;
 use crate::detect::{detect_input, DetectConfig};
 use crate::input::{load_input, to_input, Input, InputError, InputOptions};
 use crate::method::extent::ExtentError;

@@ -3,9 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::cloud::{
-    self, CloudError, FrameError, FrameOptions, FrameReport, LoadedCloud, PointCloud,
-};
+use crate::cloud::frame::{FrameError, FrameOptions, FrameReport};
+use crate::cloud::{self, CloudError, LoadedCloud, PointCloud};
 
 /// How input files are read and brought into the world frame.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -16,7 +15,7 @@ pub struct InputOptions {
     /// `None` reads PLY vertices as points and samples OBJ/OFF/STL at [`MESH_DENSITY`].
     pub sample: Option<f64>,
     /// Which clouds of bags, E57 files and depth images (topic, messages, scan, intrinsics).
-    pub source: cloud::SourceOptions,
+    pub source: cloud::source::SourceOptions,
 }
 
 /// Default surface density for meshes, points per square metre: 1 cm apart, so that every
@@ -103,26 +102,26 @@ pub fn load_inputs(
     opts: &InputOptions,
     each: &mut dyn FnMut(Result<Input, InputError>),
 ) -> Result<usize, InputError> {
-    let to_input = |part: cloud::Part| -> Result<Input, InputError> {
+    let to_input = |part: cloud::source::Part| -> Result<Input, InputError> {
         let mut frame = opts.frame.clone();
         // Depth images are in the camera's optical frame, whatever the flags say.
         frame.camera |= part.camera;
         world(path, part.name, part.cloud, &frame)
     };
     if is_mesh(path) || opts.sample.is_some() {
-        let mesh = cloud::read_mesh(path)?;
+        let mesh = cloud::mesh::read_mesh(path)?;
         // Density is per square metre of the final cloud; the mesh is in the file's units.
         let k = opts.frame.units.factor();
         let density = opts.sample.unwrap_or(MESH_DENSITY) * k * k;
-        let loaded = cloud::keep_finite(cloud::sample_mesh(&mesh, density, MESH_SEED).points);
-        each(to_input(cloud::Part {
+        let loaded = cloud::keep_finite(cloud::mesh::sample_mesh(&mesh, density, MESH_SEED).points);
+        each(to_input(cloud::source::Part {
             name: None,
             cloud: loaded,
             camera: false,
         }));
         return Ok(1);
     }
-    Ok(cloud::read_parts(path, &opts.source, &mut |p| {
+    Ok(cloud::source::read_parts(path, &opts.source, &mut |p| {
         each(to_input(p))
     })?)
 }
@@ -150,13 +149,14 @@ fn world(
     let (cloud, frame) = if untouched {
         (loaded.cloud, None)
     } else {
-        let (c, r) = cloud::to_world(loaded.cloud, frame).map_err(|source| InputError::Frame {
-            path: PathBuf::from(&label),
-            source,
-        })?;
+        let (c, r) =
+            cloud::frame::to_world(loaded.cloud, frame).map_err(|source| InputError::Frame {
+                path: PathBuf::from(&label),
+                source,
+            })?;
         (c, Some(r))
     };
-    let units_warning = cloud::check_units(&cloud).map(|w| format!("{label}: {w}"));
+    let units_warning = cloud::frame::check_units(&cloud).map(|w| format!("{label}: {w}"));
     Ok(Input {
         part,
         cloud,

@@ -62,4 +62,5 @@ pub mod input;
 pub mod mesh;
 pub mod method;
 pub mod model;
+mod num;
 pub mod report;

@@ -10,6 +10,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::cloud::PointCloud;
+use crate::num::{index32, to_i64, to_usize};
 
 pub mod ply;
 
@@ -107,7 +108,7 @@ impl Mesh {
         for c in corners {
             self.push_vertex(*c);
         }
-        let idx = |k: usize| (base + k) as u32;
+        let idx = |k: usize| index32(base + k);
         for (face, part) in BOX_FACES.iter().zip(face_parts) {
             let [a, b, c, d] = face.map(idx);
             self.push_triangle([a, b, c], part);
@@ -198,7 +199,7 @@ impl Mesh {
         };
         let u = (helper - a * a.dot(&helper)).normalize();
         let v = a.cross(&u); // (u, v, a) right-handed
-        let base = self.vertices.len() as u32;
+        let base = index32(self.vertices.len());
         for k in 0..n {
             let theta = std::f64::consts::TAU * k as f64 / n as f64;
             let off = (u * theta.cos() + v * theta.sin()) * radius;
@@ -209,8 +210,8 @@ impl Mesh {
         let ct = self.push_vertex(top_center);
         for k in 0..n {
             let k1 = (k + 1) % n;
-            let (b0, t0) = (base + 2 * k as u32, base + 2 * k as u32 + 1);
-            let (b1, t1) = (base + 2 * k1 as u32, base + 2 * k1 as u32 + 1);
+            let (b0, t0) = (base + 2 * index32(k), base + 2 * index32(k) + 1);
+            let (b1, t1) = (base + 2 * index32(k1), base + 2 * index32(k1) + 1);
             self.push_triangle([b0, b1, t1], rest);
             self.push_triangle([b0, t1, t0], rest);
             self.push_triangle([cb, b1, b0], rest);
@@ -247,7 +248,7 @@ impl Mesh {
         part: Part,
     ) {
         let (nx, ny) = (nx.max(1), ny.max(1));
-        let base = self.vertices.len() as u32;
+        let base = index32(self.vertices.len());
         for j in 0..=ny {
             for i in 0..=nx {
                 let x = x0 + (x1 - x0) * i as f64 / nx as f64;
@@ -255,7 +256,7 @@ impl Mesh {
                 self.push_vertex(Point3::new(x, y, f(x, y)));
             }
         }
-        let at = |i: usize, j: usize| base + (j * (nx + 1) + i) as u32;
+        let at = |i: usize, j: usize| base + index32(j * (nx + 1) + i);
         for j in 0..ny {
             for i in 0..nx {
                 let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
@@ -267,7 +268,7 @@ impl Mesh {
 
     /// Appends all triangles of `other` (with their labels) to this mesh.
     pub fn append(&mut self, other: &Mesh) {
-        let base = self.vertices.len() as u32;
+        let base = index32(self.vertices.len());
         self.vertices.extend_from_slice(&other.vertices);
         self.triangles
             .extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
@@ -372,11 +373,11 @@ pub fn sample_surface(
         0.0
     };
     let expected = mesh.area() * points_per_m2;
-    points.reserve(expected.ceil() as usize + mesh.len());
-    parts.reserve(expected.ceil() as usize + mesh.len());
+    points.reserve(to_usize(expected.ceil()) + mesh.len());
+    parts.reserve(to_usize(expected.ceil()) + mesh.len());
     for i in 0..mesh.triangles.len() {
         let area = mesh.triangle_area(i);
-        let count = (area * points_per_m2 + rng.random::<f64>()).floor() as usize;
+        let count = to_usize((area * points_per_m2 + rng.random::<f64>()).floor());
         if count == 0 {
             continue;
         }
@@ -430,7 +431,11 @@ pub fn sample_vertex_grid(
     ) * spacing;
     let key = |p: &Point3<f64>| {
         let q = (p.coords + offset) / spacing;
-        (q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64)
+        (
+            to_i64(q.x.floor()),
+            to_i64(q.y.floor()),
+            to_i64(q.z.floor()),
+        )
     };
     let mut order: Vec<(i64, i64, i64, usize)> = dense
         .points

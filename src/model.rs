@@ -484,7 +484,11 @@ mod tests {
     fn a_model_file_is_read_up_to_a_size_and_as_text() {
         let dir = tempfile::tempdir().unwrap();
         let big = dir.path().join("big.toml");
-        std::fs::write(&big, vec![b'#'; MAX_MODEL_BYTES as usize + 1]).unwrap();
+        std::fs::write(
+            &big,
+            vec![b'#'; usize::try_from(MAX_MODEL_BYTES).unwrap() + 1],
+        )
+        .unwrap();
         let e = read_text(&big).unwrap_err().to_string();
         assert!(e.contains("big.toml: cannot read: more than"), "{e}");
         let bin = dir.path().join("bin.toml");

@@ -10,7 +10,7 @@ use afford::detect::{detect, DetectConfig, Outcome};
 use afford::mesh::{Mesh, Part};
 use afford::model::agent::Agent;
 use afford::model::hierarchy::Hierarchy;
-use afford_synth::*;
+use afford_synth::furniture::*;
 use nalgebra::Point3;
 
 /// The hierarchy under test. Angles in degrees, lengths in metres unless "fraction of H".

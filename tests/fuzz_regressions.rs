@@ -53,7 +53,7 @@ fn seed_corpora_are_valid() {
         let pts = afford::cloud::read_ply(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(!pts.is_empty(), "{name}");
         if name.contains("mesh") {
-            let m = afford::cloud::read_mesh(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+            let m = afford::cloud::mesh::read_mesh(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
             assert!(!m.triangles.is_empty(), "{name}");
         }
     }
@@ -65,15 +65,15 @@ fn seed_corpora_are_valid() {
     for (name, bytes) in corpus("mesh") {
         let ext = ["obj", "off", "stl"][usize::from(bytes[0] % 3)];
         let p = file(&dir, &format!("seed.{ext}"), &bytes[1..]);
-        let m = afford::cloud::read_mesh(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let m = afford::cloud::mesh::read_mesh(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(!m.triangles.is_empty(), "{name}");
     }
     for (name, bytes) in corpus("bag") {
         if name.ends_with(".mcap") {
             // Each seed bag holds two PointCloud2 messages (plain, lz4 and zstd chunks).
             let p = file(&dir, "seed.mcap", &bytes);
-            let opts = afford::cloud::SourceOptions::default();
-            let n = afford::cloud::read_parts(&p, &opts, &mut |_| {})
+            let opts = afford::cloud::source::SourceOptions::default();
+            let n = afford::cloud::source::read_parts(&p, &opts, &mut |_| {})
                 .unwrap_or_else(|e| panic!("{name}: {e}"));
             assert_eq!(n, 2, "{name}");
         }

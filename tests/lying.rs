@@ -14,7 +14,7 @@ use afford::method::unfold::unfold;
 use afford::model::agent::Agent;
 use afford::model::hierarchy::Hierarchy;
 use afford::model::set::{load_set, Source};
-use afford_synth::*;
+use afford_synth::furniture::*;
 use nalgebra::{Point3, UnitQuaternion, Vector3};
 
 fn lying(height: f64) -> (Agent, Hierarchy) {

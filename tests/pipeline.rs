@@ -9,7 +9,8 @@ use afford::detect::{detect, DetectConfig, Outcome};
 use afford::mesh::{Mesh, Part};
 use afford::model::agent::Agent;
 use afford::model::hierarchy::Hierarchy;
-use afford_synth::*;
+use afford_synth::camera;
+use afford_synth::furniture::*;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
 fn models(height: f64) -> (Agent, Hierarchy) {
@@ -286,11 +287,16 @@ fn a_room_with_a_ceiling_still_gives_its_seats() {
 /// sampling of a reconstruction read as mesh vertices (6 cm voxels leave neighbours 3-8 cm
 /// apart, ~4 cm typical, like ScanNet's cleaned meshes).
 fn vertex_grid(c: &PointCloud, step: f64) -> PointCloud {
+    // A test scene of a few metres at centimetre steps: the cell is far inside i64.
+    #[allow(clippy::cast_possible_truncation)]
+    fn cell(v: f64) -> i64 {
+        v.floor() as i64
+    }
     let mut seen = std::collections::HashSet::new();
     PointCloud::new(
         c.points
             .iter()
-            .filter(|p| seen.insert((p.coords / step).map(|v| v.floor() as i64)))
+            .filter(|p| seen.insert((p.coords / step).map(cell)))
             .copied()
             .collect(),
     )

@@ -8,7 +8,7 @@ use afford::detect::{detect_prepared, prepare, DetectConfig};
 use afford::method::hypotheses::hypotheses;
 use afford::model::set::load_models;
 use afford::report::render::*;
-use afford_synth::{self as synth, ChairParams};
+use afford_synth::furniture::{self as synth, ChairParams};
 
 #[test]
 #[ignore = "writes pictures to /tmp for a person to look at"]

@@ -4,7 +4,7 @@
 //! file, every message of its PointCloud2 topic.
 
 use afford::cloud::pointcloud2::{decode, Encoding};
-use afford::cloud::{read_parts, SourceOptions};
+use afford::cloud::source::{read_parts, SourceOptions};
 use libfuzzer_sys::fuzz_target;
 
 mod common;

@@ -1,7 +1,7 @@
 #![no_main]
 //! E57 reader (every scan, with its pose) on arbitrary bytes.
 
-use afford::cloud::{read_parts, SourceOptions};
+use afford::cloud::source::{read_parts, SourceOptions};
 use libfuzzer_sys::fuzz_target;
 
 mod common;

@@ -15,5 +15,5 @@ fuzz_target!(|data: &[u8]| {
         _ => "stl",
     };
     let path = common::temp_file(ext, body);
-    let _ = afford::cloud::read_mesh(&path);
+    let _ = afford::cloud::mesh::read_mesh(&path);
 });

@@ -8,5 +8,5 @@ mod common;
 fuzz_target!(|data: &[u8]| {
     let path = common::temp_file("ply", data);
     let _ = afford::cloud::read_ply(&path);
-    let _ = afford::cloud::read_mesh(&path);
+    let _ = afford::cloud::mesh::read_mesh(&path);
 });

@@ -11,7 +11,8 @@ use std::ffi::OsString;
 use std::path::Path;
 use std::str::FromStr;
 
-use afford::cloud::{parse_matrix, CloudError, FloorMode, FrameOptions, Units};
+use afford::cloud::frame::{parse_matrix, FloorMode, FrameOptions, Units};
+use afford::cloud::CloudError;
 use afford::detect::{DetectConfig, Detection, Stats};
 use afford::embed::{self, Detected};
 use afford::input::{load_input, InputError, InputOptions};

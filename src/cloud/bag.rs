@@ -263,7 +263,7 @@ fn chunk_records(body: &[u8]) -> Result<std::borrow::Cow<'_, [u8]>, String> {
             } else {
                 ""
             },
-            out.len().min(size as usize)
+            out.len().min(usize::try_from(size).unwrap_or(usize::MAX))
         ));
     }
     Ok(out.into())

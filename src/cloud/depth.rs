@@ -82,7 +82,12 @@ pub fn read_depth_png(
 /// Writes `depth` (row-major, `width` pixels a row, raw 16-bit units) as a 16-bit
 /// greyscale PNG: the inverse of [`read_depth_png`], for tests and examples.
 pub fn write_depth_png(path: &Path, width: u32, depth: &[u16]) -> std::io::Result<()> {
-    let height = depth.len() as u32 / width.max(1);
+    let height = u32::try_from(depth.len() / width.max(1) as usize).map_err(|_| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "a depth image of more than 4294967295 rows",
+        )
+    })?;
     let mut bytes = Vec::new();
     {
         let mut enc = png::Encoder::new(&mut bytes, width, height);

@@ -16,6 +16,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::{spacing, PointCloud};
+use crate::num::to_usize;
 
 /// Largest angle (degrees) between a floor candidate's normal and the assumed up (+z after
 /// the up rotation), for scans whose up axis is known: a levelled scanner or a model.
@@ -506,7 +507,7 @@ fn find_floor(
     let stride = finite.len().div_ceil(WORK_POINTS);
     let work: Vec<Point3<f64>> = finite.iter().step_by(stride).copied().collect();
     let min_cos = max_tilt.to_radians().cos();
-    let min_points = ((work.len() as f64 * 0.02) as usize).max(10);
+    let min_points = to_usize(work.len() as f64 * 0.02).max(10);
     let mut rng = ChaCha8Rng::seed_from_u64(SEED);
     let mut remaining: Vec<Point3<f64>> = work.clone();
     // (plane, inliers in `work`)
@@ -667,6 +668,8 @@ pub fn parse_matrix(text: &str) -> Result<Matrix4<f64>, String> {
 }
 
 #[cfg(test)]
+// Test data: small literals and lengths, written into the fields of a file by hand.
+#[allow(clippy::cast_possible_truncation)]
 mod tests {
     use super::*;
 

@@ -17,6 +17,7 @@ use std::borrow::Cow;
 use super::{CloudError, PointCloud};
 use crate::mesh::ply::{parse_mesh_ply, MeshError};
 use crate::mesh::{sample_surface, Mesh, Part};
+use crate::num::{capacity, index32 as index};
 
 /// [`sample_mesh`] never draws more than about this many points: a higher density is
 /// lowered to fit.
@@ -148,7 +149,7 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>, CloudError> {
     if len > MAX_MESH_BYTES {
         return Err(too_big());
     }
-    let mut bytes = Vec::with_capacity(len as usize);
+    let mut bytes = Vec::with_capacity(capacity(len, usize::MAX));
     f.by_ref()
         .take(MAX_MESH_BYTES)
         .read_to_end(&mut bytes)
@@ -295,7 +296,7 @@ fn parse_obj(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
                 ),
             ));
         }
-        let poly: Vec<u32> = poly.iter().map(|&i| i as u32).collect();
+        let poly: Vec<u32> = poly.iter().map(|&i| index(i)).collect();
         push_fan(&mut mesh, &poly);
     }
     if mesh.triangles.is_empty() {
@@ -428,7 +429,7 @@ fn parse_off(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
         let mut poly = Vec::with_capacity(n);
         for t in &toks[1..=n] {
             match t.parse::<usize>() {
-                Ok(i) if i < nv => poly.push(i as u32),
+                Ok(i) if i < nv => poly.push(index(i)),
                 _ => {
                     return Err(body_err(
                         path,
@@ -451,7 +452,7 @@ fn parse_stl(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
         let n = u32::from_le_bytes(bytes[80..84].try_into().expect("4 bytes")) as u64;
         let expected = 84 + 50 * n;
         if expected == bytes.len() as u64 {
-            return parse_stl_binary(bytes, n as usize, path);
+            return parse_stl_binary(bytes, capacity(n, usize::MAX), path);
         }
         let ascii = bytes.trim_ascii_start().starts_with(b"solid")
             && !bytes[..bytes.len().min(4096)].contains(&0);
@@ -510,7 +511,7 @@ fn parse_stl_binary(bytes: &[u8], n: usize, path: &Path) -> Result<Mesh, CloudEr
                 }
                 *v = f as f64;
             }
-            *slot = mesh.vertices.len() as u32;
+            *slot = index(mesh.vertices.len());
             mesh.vertices.push(Point3::from(xyz));
         }
         mesh.triangles.push(corner);
@@ -544,7 +545,7 @@ fn parse_stl_ascii(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
                 let x = coord(toks.next(), path, line)?;
                 let y = coord(toks.next(), path, line)?;
                 let z = coord(toks.next(), path, line)?;
-                poly.push(mesh.vertices.len() as u32);
+                poly.push(index(mesh.vertices.len()));
                 push_vertex(&mut mesh, Point3::new(x, y, z), path, &at())?;
             }
             "endloop" => {
@@ -586,6 +587,8 @@ fn parse_stl_ascii(bytes: &[u8], path: &Path) -> Result<Mesh, CloudError> {
 /// takes at least one byte), so that a lying header cannot make the reader loop or
 /// allocate for long.
 #[cfg(test)]
+// Test data: small literals and lengths, written into the fields of a file by hand.
+#[allow(clippy::cast_possible_truncation)]
 mod tests {
     use super::*;
 

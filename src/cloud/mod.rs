@@ -16,18 +16,15 @@ mod ply;
 pub mod pointcloud2;
 mod scannet;
 pub mod source;
-pub mod spacing;
+mod spacing;
 mod xyz;
 
-pub use frame::{
-    check_units, parse_matrix, to_world, FloorMode, FrameError, FrameOptions, FrameReport, Units,
-    Up,
-};
-pub use mesh::{expected_samples, read_mesh, sample_mesh, MAX_SAMPLES};
+// One path per public item: the readers of single formats and the sample spacing are
+// here; frames (`frame`), mesh sampling (`mesh`), multi-cloud sources (`source`), depth
+// images (`depth`) and ROS messages (`pointcloud2`) are under their module's name.
 pub use pcd::{read_pcd, write_pcd};
 pub(crate) use ply::{parse_header, write_ply_typed, Encoding, Kind, Scalar};
 pub use ply::{read_ply, read_ply_property, write_ply_points};
-pub use source::{read_parts, Intrinsics, Part, Pick, SourceOptions};
 pub use spacing::point_spacing;
 pub use xyz::read_xyz;
 
@@ -119,13 +116,13 @@ pub enum CloudError {
 
 /// Reads a point cloud file, choosing the reader by extension (`.ply`, `.pcd`,
 /// `.xyz`/`.txt`/`.csv`; `.e57` merges every scan; a `.mcap` bag must hold one
-/// PointCloud2 message; see [`read_parts`] to choose among several clouds).
+/// PointCloud2 message; see [`source::read_parts`] to choose among several clouds).
 ///
 /// Points with a non-finite coordinate are dropped and counted in [`LoadedCloud::dropped_non_finite`].
 pub fn load(path: &Path) -> Result<LoadedCloud, CloudError> {
     regular_file(path)?;
     if source::needs_source(path) {
-        return Ok(source::load_one(path, &SourceOptions::default())?.cloud);
+        return Ok(source::load_one(path, &source::SourceOptions::default())?.cloud);
     }
     load_single(path)
 }

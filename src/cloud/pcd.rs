@@ -14,6 +14,7 @@ use super::ply::{
     body_err, header_err, io_err, next_header_line, read_line_capped, shorten, Line, MAX_PREALLOC,
 };
 use super::CloudError;
+use crate::num::{capacity, to_f32};
 
 /// Largest output one LZF input byte can produce (a 3-byte back reference yields 264 bytes).
 const LZF_MAX_RATIO: u64 = 88;
@@ -395,7 +396,7 @@ fn read_ascii<R: io::BufRead>(
     // No size check: the body is read line by line to its end (preallocation is capped),
     // and a row missing a value is reported where it is, not as a short file.
     let _ = body_len;
-    let mut out = Vec::with_capacity((h.points as usize).min(MAX_PREALLOC));
+    let mut out = Vec::with_capacity(capacity(h.points, MAX_PREALLOC));
     let mut lineno = h.lines;
     while (out.len() as u64) < h.points {
         lineno += 1;
@@ -455,7 +456,7 @@ fn read_binary<R: Read>(
     body_len: u64,
 ) -> Result<Vec<Point3<f64>>, CloudError> {
     too_big(path, h, h.record as u64, body_len)?;
-    let mut out = Vec::with_capacity((h.points as usize).min(MAX_PREALLOC));
+    let mut out = Vec::with_capacity(capacity(h.points, MAX_PREALLOC));
     let mut row = vec![0u8; h.record];
     for i in 0..h.points {
         r.read_exact(&mut row).map_err(|e| {
@@ -526,11 +527,11 @@ fn read_compressed<R: Read>(
             ),
         ));
     }
-    let mut input = vec![0u8; compressed as usize];
+    let mut input = vec![0u8; capacity(compressed, usize::MAX)];
     r.read_exact(&mut input).map_err(|e| io_err(path, e))?;
-    let data = lzf_decompress(&input, uncompressed as usize)
+    let data = lzf_decompress(&input, capacity(uncompressed, usize::MAX))
         .map_err(|(off, what)| body_err(path, at(8 + off as u64), what))?;
-    let n = h.points as usize;
+    let n = capacity(h.points, usize::MAX);
     let mut out = Vec::with_capacity(n);
     // Column start of each field: all values of field 0, then of field 1, ...
     let col = |fi: usize| -> usize { h.fields[..fi].iter().map(|f| f.bytes() * n).sum() };
@@ -633,7 +634,7 @@ pub fn write_pcd(path: &Path, points: &[Point3<f64>]) -> Result<(), CloudError> 
     bytes.reserve(points.len() * 12);
     for p in points {
         for c in p.coords.iter() {
-            bytes.extend_from_slice(&(*c as f32).to_le_bytes());
+            bytes.extend_from_slice(&to_f32(*c).to_le_bytes());
         }
     }
     crate::report::atomic::write_bytes(path, &bytes).map_err(|source| CloudError::Write {
@@ -643,6 +644,8 @@ pub fn write_pcd(path: &Path, points: &[Point3<f64>]) -> Result<(), CloudError> 
 }
 
 #[cfg(test)]
+// Test data: small literals and lengths, written into the fields of a file by hand.
+#[allow(clippy::cast_possible_truncation)]
 mod tests {
     use super::*;
     use std::path::PathBuf;

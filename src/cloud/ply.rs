@@ -12,6 +12,7 @@ use std::path::Path;
 use nalgebra::Point3;
 
 use super::CloudError;
+use crate::num::{capacity, to_f32, to_u64};
 
 /// Longest header line accepted, in bytes (longer means the file is not a PLY header).
 pub(super) const MAX_HEADER_LINE: usize = 64 * 1024;
@@ -137,6 +138,8 @@ impl Scalar {
     }
 
     /// Writes `v` as this type, little-endian (`as` casts: integers truncated and saturated).
+    // The file's declared type decides: saturating is what it is asked for.
+    #[allow(clippy::cast_possible_truncation)]
     fn write_le<W: Write + ?Sized>(self, w: &mut W, v: f64) -> io::Result<()> {
         match self {
             Scalar::I8 => w.write_all(&(v as i8).to_le_bytes()),
@@ -156,7 +159,7 @@ impl Scalar {
         let v = self.decode(&self.le_bytes(v), false);
         match self {
             _ if v.is_nan() => write!(w, "nan"),
-            Scalar::F32 => write!(w, "{}", v as f32),
+            Scalar::F32 => write!(w, "{}", to_f32(v)),
             _ => write!(w, "{v}"),
         }
     }
@@ -555,7 +558,7 @@ fn read_binary_body<R: Read>(
         skip_binary_element(path, src, e, big)?;
     }
     let v = &h.elements[vi];
-    let mut out = Vec::with_capacity((v.count as usize).min(MAX_PREALLOC));
+    let mut out = Vec::with_capacity(capacity(v.count, MAX_PREALLOC));
     let mut buf = [0u8; 8];
     let mut vals = [0f64; 3];
     for i in 0..v.count {
@@ -597,7 +600,7 @@ fn skip_list<R: Read>(
         ));
     }
     // n is an integer of at most 32 bits, so the product cannot overflow.
-    Ok(src.skip(n as u64 * item.size() as u64))
+    Ok(src.skip(to_u64(n) * item.size() as u64))
 }
 
 fn binary_read_err(
@@ -662,7 +665,7 @@ fn read_ascii_body<R: BufRead>(
             check_ascii_row(path, &text, e, &at)?;
         }
     }
-    let mut out = Vec::with_capacity((v.count as usize).min(MAX_PREALLOC));
+    let mut out = Vec::with_capacity(capacity(v.count, MAX_PREALLOC));
     for i in 0..v.count {
         let (text, at) = line_no.next(path, r, "vertex", (i, v.count))?;
         let toks: Vec<&str> = text.split_ascii_whitespace().collect();
@@ -679,7 +682,7 @@ fn read_ascii_body<R: BufRead>(
             })?;
             // A `float` property holds what a binary file would: the value rounded to f32.
             vals[k] = match v.props[pi].kind {
-                Kind::Scalar(Scalar::F32) => f64::from(x as f32),
+                Kind::Scalar(Scalar::F32) => f64::from(to_f32(x)),
                 _ => x,
             };
         }
@@ -934,6 +937,8 @@ pub fn read_ply_property(path: &Path, name: &str) -> Result<Option<Vec<f64>>, Cl
 }
 
 #[cfg(test)]
+// Test data: small literals and lengths, written into the fields of a file by hand.
+#[allow(clippy::cast_possible_truncation)]
 mod tests {
     use super::*;
     use ply_rs_bw::ply::{

@@ -3,6 +3,7 @@
 //! are read, whatever their type, offset and order, organised clouds (height > 1, rows
 //! possibly padded) or not, with the point data in either byte order (`is_bigendian`).
 
+use crate::num::to_f32;
 use nalgebra::Point3;
 
 /// How a message was serialised.
@@ -264,10 +265,21 @@ pub fn decode(buf: &[u8], encoding: Encoding) -> Result<Decoded, String> {
     })
 }
 
+/// A length as the message's 32-bit field.
+///
+/// # Panics
+/// When it does not fit: a message of 4 GiB or more cannot be written.
+fn len32(n: usize) -> u32 {
+    u32::try_from(n).expect("a PointCloud2 message under 4 GiB (its lengths are 32-bit)")
+}
+
 /// Serialises a `sensor_msgs/PointCloud2` with float32 `x, y, z` (and `pad` float32 fields
 /// before them, to exercise offsets) as ROS 2 CDR: the inverse of [`decode`], for tests,
 /// fuzz seeds and examples. `height` rows of `points.len() / height` points; `row_pad`
 /// bytes after each row; `little` picks the CDR byte order and `big_data` the data's.
+///
+/// # Panics
+/// When the message would be 4 GiB or more (its lengths are 32-bit).
 pub fn encode_cdr(
     points: &[Point3<f64>],
     height: u32,
@@ -284,31 +296,31 @@ pub fn encode_cdr(
     w.u32(34);
     w.string("camera_depth_optical_frame");
     let height = height.max(1);
-    let width = points.len() as u32 / height;
+    let width = len32(points.len()) / height;
     w.u32(height);
     w.u32(width);
     let names: Vec<String> = (0..pad)
         .map(|i| format!("pad{i}"))
         .chain(["x", "y", "z"].map(String::from))
         .collect();
-    w.u32(names.len() as u32);
+    w.u32(len32(names.len()));
     for (i, n) in names.iter().enumerate() {
         w.string(n);
-        w.u32(4 * i as u32);
+        w.u32(len32(4 * i));
         w.out.push(7);
         w.u32(1);
     }
     w.out.push(u8::from(big_data));
     let point_step = 4 * names.len();
     let row_step = width as usize * point_step + row_pad;
-    w.u32(point_step as u32);
-    w.u32(row_step as u32);
+    w.u32(len32(point_step));
+    w.u32(len32(row_step));
     let mut data = Vec::new();
     for r in 0..height as usize {
         for p in &points[r * width as usize..(r + 1) * width as usize] {
             data.extend(std::iter::repeat_n(0u8, 4 * pad));
             for k in 0..3 {
-                let v = p[k] as f32;
+                let v = to_f32(p[k]);
                 data.extend(if big_data {
                     v.to_be_bytes()
                 } else {
@@ -318,7 +330,7 @@ pub fn encode_cdr(
         }
         data.extend(std::iter::repeat_n(0xAAu8, row_pad));
     }
-    w.u32(data.len() as u32);
+    w.u32(len32(data.len()));
     w.out.extend(data);
     w.out.push(1);
     w.out
@@ -342,7 +354,7 @@ impl Writer {
     }
 
     fn string(&mut self, s: &str) {
-        self.u32(s.len() as u32 + 1);
+        self.u32(len32(s.len() + 1));
         self.out.extend(s.as_bytes());
         self.out.push(0);
     }

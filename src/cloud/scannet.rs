@@ -14,7 +14,7 @@ pub(crate) fn axis_alignment(text: &str) -> Option<&str> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cloud::parse_matrix;
+    use crate::cloud::frame::parse_matrix;
 
     #[test]
     fn the_line_or_the_whole_meta_file_gives_the_matrix() {

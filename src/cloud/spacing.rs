@@ -11,6 +11,7 @@ use std::collections::{HashMap, HashSet};
 use nalgebra::Point3;
 
 use super::PointCloud;
+use crate::num::{to_i64, to_usize};
 
 /// Points whose neighbours [`point_spacing`] measures: evenly spread over the cloud's order.
 const QUERIES: usize = 256;
@@ -46,7 +47,7 @@ pub(crate) fn robust_extent(cloud: &PointCloud) -> Option<Extent> {
     }
     let step = n.div_ceil(EXTENT_SAMPLE);
     let sample: Vec<&Point3<f64>> = cloud.points.iter().filter(finite).step_by(step).collect();
-    let cut = (sample.len() as f64 * EXTENT_TRIM) as usize;
+    let cut = to_usize(sample.len() as f64 * EXTENT_TRIM);
     let mut lo = Point3::origin();
     let mut hi = Point3::origin();
     for axis in 0..3 {
@@ -97,7 +98,7 @@ pub(crate) fn neighbour_distance(
         // Cells of a finite box over a finite cell are bounded: 2 sqrt(n) per axis at most.
         k.iter()
             .all(|v| v.is_finite() && v.abs() < 1e15)
-            .then(|| k.map(|v| v.floor() as i64))
+            .then(|| k.map(|v| to_i64(v.floor())))
     };
     let step = n.div_ceil(queries.max(1));
     let queries: Vec<(usize, Point3<f64>)> = cloud

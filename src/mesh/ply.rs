@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::Point3;
 
 use super::{Mesh, Part};
+use crate::num::{index32, to_usize};
 
 /// What went wrong reading a mesh file.
 #[derive(Debug, thiserror::Error)]
@@ -113,10 +114,14 @@ pub fn parse_mesh_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
                         if !(0.0..=1e6).contains(&n) {
                             return Err(err(format!("bad list length {n}")));
                         }
-                        for _ in 0..n as usize {
+                        for _ in 0..to_usize(n) {
                             let v = next(item)?;
                             if e.name == "face" {
-                                face.push(v as usize);
+                                // An index is a whole number from 0: `as` would read -1 as 0.
+                                if !(v >= 0.0 && v.fract() == 0.0) {
+                                    return Err(err(format!("bad face index {v}")));
+                                }
+                                face.push(to_usize(v));
                             }
                         }
                     }
@@ -146,7 +151,7 @@ pub fn parse_mesh_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
         }
         for k in 1..f.len().saturating_sub(1) {
             mesh.triangles
-                .push([f[0] as u32, f[k] as u32, f[k + 1] as u32]);
+                .push([index32(f[0]), index32(f[k]), index32(f[k + 1])]);
             mesh.parts.push(Part::Other);
         }
     }
@@ -156,6 +161,23 @@ pub fn parse_mesh_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_negative_or_fractional_face_index_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        for (bad, says) in [("-1", "bad face index -1"), ("1.5", "bad face index 1.5")] {
+            let ascii = format!(
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\
+                 property float y\nproperty float z\n\
+                 element face 1\nproperty list uchar float vertex_indices\nend_header\n\
+                 0 0 0\n1 0 0\n1 1 0\n3 {bad} 1 2\n"
+            );
+            let p = dir.path().join("a.ply");
+            std::fs::write(&p, ascii).unwrap();
+            let e = read_mesh_ply(&p).unwrap_err().to_string();
+            assert!(e.contains(says), "{e}");
+        }
+    }
 
     #[test]
     fn reads_ascii_and_binary_quads_as_triangles() {

@@ -23,6 +23,7 @@ use nalgebra::Point3;
 
 use crate::cloud::PointCloud;
 use crate::detect::DetectConfig;
+use crate::num::to_i64;
 
 /// Limits of the guard stage. Defaults carry their reasons.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -154,11 +155,14 @@ pub fn guard<'a>(
         let extent = [hi.x - lo.x, hi.y - lo.y, hi.z - lo.z];
         let need = grid_bytes(extent, detect, cfg.reach);
         if need > cfg.grid_budget as f64 {
+            // Above the budget, so positive, and capped at u64::MAX: only the fraction goes.
+            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            let need = need.min(u64::MAX as f64) as u64;
             return Err(ExtentError::TooLarge {
                 path: path.to_path_buf(),
                 extent,
                 dropped,
-                need: need.min(u64::MAX as f64) as u64,
+                need,
                 budget: cfg.grid_budget,
             });
         }
@@ -181,7 +185,7 @@ pub fn grid_bytes(extent: [f64; 3], cfg: &DetectConfig, reach: f64) -> f64 {
 /// Per point, whether it lies in a connected region of coarse cubes (edge `cell`, touching
 /// by face, edge or corner) that holds at least `share` of the points, or in the largest.
 fn bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
-    let key = |p: &Point3<f64>| p.coords.map(|c| (c / cell).floor() as i64);
+    let key = |p: &Point3<f64>| p.coords.map(|c| to_i64((c / cell).floor()));
     let mut cells: HashMap<[i64; 3], usize> = HashMap::new();
     let mut of_point = Vec::with_capacity(points.len());
     let mut keys: Vec<[i64; 3]> = Vec::new();

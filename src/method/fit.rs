@@ -9,6 +9,7 @@ use crate::method::hypotheses::Hypothesis;
 use crate::method::scene::Scene;
 use crate::model::agent::{Agent, Cylinder, FkCache, Placement, Posture};
 use crate::model::hierarchy::Hierarchy;
+use crate::num::to_usize;
 
 /// The agent resting at a hypothesis in its initial pose.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,7 +39,7 @@ pub fn headings(h: &Hierarchy, hyp: &Hypothesis) -> Vec<f64> {
 }
 
 fn all_round(step: f64) -> Vec<f64> {
-    let n = (std::f64::consts::TAU / step).round().max(1.0) as usize;
+    let n = to_usize((std::f64::consts::TAU / step).round().max(1.0));
     (0..n)
         .map(|i| i as f64 * std::f64::consts::TAU / n as f64)
         .collect()
@@ -174,7 +175,7 @@ pub fn stability(
     let mut n = 0usize;
     for c in agent.cylinders(frames, |j| h.fit.stability_links.contains(&j)) {
         let len = (c.b - c.a).norm();
-        let k = (len / h.fit.sample_spacing).ceil().max(1.0) as usize;
+        let k = to_usize((len / h.fit.sample_spacing).ceil().max(1.0));
         for i in 0..=k {
             let p = c.a + (c.b - c.a) * (i as f64 / k as f64);
             sum += scene.surface_distance(&p, c.radius);

@@ -8,6 +8,7 @@
 //! seen stay invalid.
 
 use crate::cloud::{point_spacing, PointCloud};
+use crate::num::{to_isize, to_usize};
 
 /// How the height map is built. Defaults carry their reasons.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -98,17 +99,17 @@ impl HeightMap {
                 heights: Vec::new(),
             };
         };
-        let nx = ((hi.x - lo.x) / cell).floor() as usize + 1;
-        let ny = ((hi.y - lo.y) / cell).floor() as usize + 1;
+        let nx = to_usize(((hi.x - lo.x) / cell).floor()) + 1;
+        let ny = to_usize(((hi.y - lo.y) / cell).floor()) + 1;
         let reach = point_spacing(cloud).map_or(0.0, |s| (cfg.sample_reach * s).min(cfg.max_reach));
         // Cell offsets a point may reach beyond its own cell (none for dense clouds).
-        let r = (reach / cell).ceil() as isize;
+        let r = to_isize((reach / cell).ceil());
         let cells_of = |x: f64, y: f64, out: &mut Vec<usize>| {
             out.clear();
             let fx = (x - lo.x) / cell;
             let fy = (y - lo.y) / cell;
-            let ix = (fx as usize).min(nx - 1) as isize;
-            let iy = (fy as usize).min(ny - 1) as isize;
+            let ix = to_usize(fx).min(nx - 1) as isize;
+            let iy = to_usize(fy).min(ny - 1) as isize;
             out.push(iy as usize * nx + ix as usize);
             for dy in -r..=r {
                 for dx in -r..=r {
@@ -184,7 +185,7 @@ impl HeightMap {
 
     /// Cell offsets `(dx, dy)` whose centres lie within `radius` metres of a cell's centre.
     pub fn disc(&self, radius: f64) -> Vec<(isize, isize)> {
-        let r = (radius / self.cell).floor() as isize;
+        let r = to_isize((radius / self.cell).floor());
         let mut out = Vec::new();
         for dy in -r..=r {
             for dx in -r..=r {
@@ -252,7 +253,7 @@ mod tests {
 
     /// A square of points `step` apart over `[x0, x0 + side) x [y0, y0 + side)` at height `z`.
     fn square(x0: f64, y0: f64, side: f64, step: f64, z: f64) -> Vec<Point3<f64>> {
-        let n = (side / step).round() as usize;
+        let n = to_usize((side / step).round());
         let mut pts = Vec::new();
         for i in 0..n {
             for j in 0..n {
@@ -278,12 +279,8 @@ mod tests {
         pts.extend(square(0.2, 1.0, 0.3, 0.02, 0.5)); // a bed top ...
         pts.extend(square(0.2, 1.0, 0.3, 0.02, 1.5)); // ... under an upper bunk
         let m = HeightMap::from_cloud(&PointCloud::new(pts.clone()), &HeightMapConfig::default());
-        let at = |x: f64, y: f64| {
-            m.get(
-                ((x - m.x0) / m.cell) as isize,
-                ((y - m.y0) / m.cell) as isize,
-            )
-        };
+        let at =
+            |x: f64, y: f64| m.get(to_isize((x - m.x0) / m.cell), to_isize((y - m.y0) / m.cell));
         assert_eq!(at(0.72, 0.72), Some(0.45), "seat under the ceiling");
         assert_eq!(at(1.4, 0.7), Some(0.72), "no room to sit under a table top");
         assert_eq!(at(1.1, 1.5), Some(0.0), "shelf");
@@ -296,8 +293,8 @@ mod tests {
         }
         let m = HeightMap::from_cloud(&PointCloud::new(back), &HeightMapConfig::default());
         let top = m.get(
-            ((0.52 - m.x0) / m.cell) as isize,
-            ((0.7 - m.y0) / m.cell) as isize,
+            to_isize((0.52 - m.x0) / m.cell),
+            to_isize((0.7 - m.y0) / m.cell),
         );
         assert!((top.unwrap() - 1.03).abs() < 1e-9, "{top:?}");
         // A cell where only a roof was seen (the floor under it hidden) is invalid.

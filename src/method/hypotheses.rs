@@ -6,6 +6,7 @@ use nalgebra::{Matrix3, Point3, Vector3};
 use crate::method::fuzzy::{rule, Trapezoid};
 use crate::method::heightmap::HeightMap;
 use crate::model::hierarchy::{HypothesisRule, Orientation};
+use crate::num::to_usize;
 
 /// A promising position for the agent.
 #[derive(Debug, Clone, PartialEq)]
@@ -37,9 +38,9 @@ pub fn hypotheses(
     let neighbourhood = map.disc(rule_.gradient_radius * body_height);
     let height = rule_.height.map(|t| t.scaled(body_height));
     // Only every `step`-th cell in x and y is tried (grid-aligned, so deterministic).
-    let step = rule_.spacing.map_or(1, |s| {
-        ((s * body_height / map.cell).round() as usize).max(1)
-    });
+    let step = rule_
+        .spacing
+        .map_or(1, |s| to_usize((s * body_height / map.cell).round()).max(1));
     let mut out = Vec::new();
     for iy in (0..map.ny).step_by(step) {
         for ix in (0..map.nx).step_by(step) {

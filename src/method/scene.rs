@@ -21,6 +21,7 @@ use parry3d::shape::{Cylinder as ParryCylinder, Voxels};
 
 use crate::cloud::PointCloud;
 use crate::model::agent::Cylinder;
+use crate::num::{to_f32, to_i64, to_usize};
 
 /// How the scene is built.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -98,7 +99,7 @@ impl Scene {
             return Scene {
                 voxel: v,
                 origin,
-                size: Vector::splat(v as f32),
+                size: Vector::splat(to_f32(v)),
                 parry_aabb: None,
                 voxels: OnceLock::new(),
                 field: None,
@@ -115,10 +116,10 @@ impl Scene {
                 hi[a] = hi[a].max(k[a]);
             }
         }
-        let size = Vector::splat(v as f32);
-        let margin = (cfg.field_margin / v).ceil() as i64;
+        let size = Vector::splat(to_f32(v));
+        let margin = to_i64((cfg.field_margin / v).ceil());
         let fmin = [lo[0] - margin, lo[1] - margin, lo[2] - margin];
-        let dims = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1 + 2 * margin) as usize);
+        let dims = [0, 1, 2].map(|a| offset(hi[a] - lo[a] + 1 + 2 * margin));
         let field = DistanceField::new(fmin, dims, &keys, v);
         let world =
             |k: [i64; 3]| Point3::new(k[0] as f64 * v, k[1] as f64 * v, k[2] as f64 * v) + origin;
@@ -181,7 +182,7 @@ impl Scene {
         }
         let axis = c.b - c.a;
         let len = axis.norm();
-        let n = (len / self.voxel).ceil().max(1.0) as usize;
+        let n = to_usize((len / self.voxel).ceil().max(1.0));
         let spacing = len / n as f64;
         let mut best = f64::INFINITY;
         for i in 0..=n {
@@ -215,7 +216,7 @@ impl Scene {
         let axis = c.b - c.a;
         let len = axis.norm();
         if c.radius > DECIDE_MARGIN && len > 2.0 * DECIDE_MARGIN {
-            let n = (len / self.voxel).ceil() as usize;
+            let n = to_usize((len / self.voxel).ceil());
             let inner = len - 2.0 * DECIDE_MARGIN;
             for i in 0..=n {
                 let p = c.a + axis * ((DECIDE_MARGIN + inner * i as f64 / n as f64) / len);
@@ -246,11 +247,7 @@ impl Scene {
         let size = self.size;
         let half_diag = (size.x as f64).hypot(size.y as f64).hypot(size.z as f64) / 2.0;
         // `Voxels::voxel_center`.
-        let centre = |k: [i64; 3]| {
-            (ivect_to_vect(IVector::new(k[0] as i32, k[1] as i32, k[2] as i32))
-                + Vector::splat(0.5))
-                * size
-        };
+        let centre = |k: [i64; 3]| (ivect_to_vect(ivector(k)) + Vector::splat(0.5)) * size;
         // Where the voxel centred at `p` stands against the cylinder.
         let clear2 = (r + half_diag + DECIDE_MARGIN).powi(2);
         let inside2 = (r - DECIDE_MARGIN).max(0.0).powi(2);
@@ -309,7 +306,7 @@ impl Scene {
                     field.min,
                     [0, 1, 2].map(|a| field.min[a] + field.dims[a] as i64),
                     |k| {
-                        keys.push(IVector::new(k[0] as i32, k[1] as i32, k[2] as i32));
+                        keys.push(ivector(k));
                         false
                     },
                 );
@@ -330,12 +327,15 @@ impl Scene {
         let dir = axis / len;
         let rot = Rotation::from_rotation_arc(
             Vector::Y,
-            Vector::new(dir.x as f32, dir.y as f32, dir.z as f32),
+            Vector::new(to_f32(dir.x), to_f32(dir.y), to_f32(dir.z)),
         );
-        let pose = Pose::from_parts(Vector::new(mid.x as f32, mid.y as f32, mid.z as f32), rot);
+        let pose = Pose::from_parts(
+            Vector::new(to_f32(mid.x), to_f32(mid.y), to_f32(mid.z)),
+            rot,
+        );
         Some((
             pose,
-            ParryCylinder::new((len / 2.0) as f32, c.radius as f32),
+            ParryCylinder::new(to_f32(len / 2.0), to_f32(c.radius)),
         ))
     }
 
@@ -355,7 +355,7 @@ impl Scene {
             cell_of(&l)
         };
         let axis = c.b - c.a;
-        let n = ((axis.norm() / v).ceil() as usize).max(1);
+        let n = to_usize((axis.norm() / v).ceil()).max(1);
         let (mut best, mut at) = (f32::INFINITY, None);
         for i in 0..=n {
             let p = c.a + axis * (i as f64 / n as f64);
@@ -501,7 +501,7 @@ const PARRY_CHUNK: i64 = 8;
 /// voxel edge `size` (local frame, metres, f32): the union of the 8^3-voxel chunks that
 /// hold them, computed as parry computes each chunk's box (the same f32 values).
 fn parry_chunks_aabb(lo: [i64; 3], hi: [i64; 3], size: Vector) -> Aabb {
-    let key = |k: [i64; 3]| IVector::new(k[0] as i32, k[1] as i32, k[2] as i32);
+    let key = ivector;
     let mins = lo.map(|l| l.div_euclid(PARRY_CHUNK) * PARRY_CHUNK);
     let maxs = hi.map(|h| (h.div_euclid(PARRY_CHUNK) + 1) * PARRY_CHUNK);
     Aabb::new(
@@ -524,8 +524,29 @@ enum Side {
 /// `v.floor() as i64` without a call to libm's `floor` (x86-64 without SSE4.1 has no
 /// rounding instruction): the same value for every `v` (saturating as `as` does).
 fn floor_i64(v: f64) -> i64 {
-    let t = v as i64;
+    let t = to_i64(v);
     t.saturating_sub(((t as f64) > v) as i64)
+}
+
+/// A grid key as parry3d's voxel index (`i32` per axis), saturating. Keys count voxels
+/// from the cloud's centre, so they fit unless the extent is over 8,500 km at the finest
+/// voxel (2 mm; the extent guard allows coordinates up to 1e7 m); such a key stays at the
+/// grid's edge instead of wrapping to its other side.
+fn ivector(k: [i64; 3]) -> IVector {
+    let c = |v: i64| i32::try_from(v).unwrap_or(if v < 0 { i32::MIN } else { i32::MAX });
+    IVector::new(c(k[0]), c(k[1]), c(k[2]))
+}
+
+/// The offset of a key from a lower corner it is known not to be below (the box's
+/// minimum, or a difference clamped at 0): an index into the grid's arrays.
+fn offset(i: i64) -> usize {
+    usize::try_from(i).unwrap_or(0)
+}
+
+/// An x offset as the distance field stores it, `u32` (half the memory of `usize`),
+/// saturating: a box wider than 2^32 voxels exceeds any grid budget, so it never does.
+fn x32(x: usize) -> u32 {
+    u32::try_from(x).unwrap_or(u32::MAX)
 }
 
 /// The grid cell of a position given in voxel units (local frame).
@@ -589,7 +610,8 @@ fn row_table(rows: &[u64], ids: usize) -> Option<Vec<u32>> {
         while r < rows.len() && rows[r] < id {
             r += 1;
         }
-        table.push(r as u32);
+        // `rows.len()` fits u32 (checked above), and r <= rows.len().
+        table.push(u32::try_from(r).unwrap_or(u32::MAX));
     }
     Some(table)
 }
@@ -653,8 +675,8 @@ impl DistanceField {
         let mut cells: Vec<(u64, u32)> = keys
             .iter()
             .map(|k| {
-                let o = [0, 1, 2].map(|a| (k[a] - min[a]) as u64);
-                (o[2] * ny + o[1], o[0] as u32)
+                let o = [0, 1, 2].map(|a| offset(k[a] - min[a]));
+                (o[2] as u64 * ny + o[1] as u64, x32(o[0]))
             })
             .collect();
         cells.sort_unstable();
@@ -679,7 +701,7 @@ impl DistanceField {
         DistanceField {
             min,
             dims,
-            voxel: v as f32,
+            voxel: to_f32(v),
             rows,
             row_start,
             row_table,
@@ -695,11 +717,9 @@ impl DistanceField {
     fn offsets(&self, k: [i64; 3]) -> Option<[usize; 3]> {
         let mut o = [0usize; 3];
         for a in 0..3 {
-            let i = k[a] - self.min[a];
-            if i < 0 || i as usize >= self.dims[a] {
-                return None;
-            }
-            o[a] = i as usize;
+            o[a] = usize::try_from(k[a] - self.min[a])
+                .ok()
+                .filter(|&i| i < self.dims[a])?;
         }
         Some(o)
     }
@@ -739,7 +759,9 @@ impl DistanceField {
         );
         self.rows[r..end].iter().enumerate().map(move |(i, &id)| {
             let (a, b) = (self.row_start[r + i], self.row_start[r + i + 1]);
-            ((id - base) as usize, &self.xs[a..b])
+            // Below `y1`, a row of the box: fits usize.
+            let y = usize::try_from(id - base).unwrap_or(usize::MAX);
+            (y, &self.xs[a..b])
         })
     }
 
@@ -759,7 +781,10 @@ impl DistanceField {
                     let mut d = [0f32];
                     nearest_in_list(xs, o[0], &mut d);
                     let (dy, dz) = (y.abs_diff(o[1]) as u64, z.abs_diff(o[2]) as u64);
-                    best = best.min(d[0] as u64 + dy * dy + dz * dz);
+                    // A squared distance in whole cells within the box, exact in f32.
+                    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+                    let dx2 = d[0] as u64;
+                    best = best.min(dx2 + dy * dy + dz * dz);
                 }
             }
             let whole = y0 == 0 && y1 == ny && z0 == 0 && z1 == nz;
@@ -773,7 +798,7 @@ impl DistanceField {
             pad = if best == u64::MAX {
                 pad * PAD_GROWTH
             } else {
-                ((best as f64).sqrt().ceil() as usize).max(pad + 1)
+                to_usize((best as f64).sqrt().ceil()).max(pad + 1)
             };
         }
     }
@@ -792,7 +817,11 @@ impl DistanceField {
     /// none is): a look-up in the row table, or a binary search without one.
     fn first_row(&self, id: u64) -> usize {
         match &self.row_table {
-            Some(t) => t.get(id as usize).map_or(self.rows.len(), |&r| r as usize),
+            // An id past usize is past the table: no entry, as past its end.
+            Some(t) => usize::try_from(id)
+                .ok()
+                .and_then(|i| t.get(i))
+                .map_or(self.rows.len(), |&r| r as usize),
             None => self.rows.partition_point(|&r| r < id),
         }
     }
@@ -800,7 +829,7 @@ impl DistanceField {
     /// Whether cell `k` is occupied.
     fn occupied(&self, k: [i64; 3]) -> bool {
         self.offsets(k)
-            .is_some_and(|o| self.row(o[1], o[2]).binary_search(&(o[0] as u32)).is_ok())
+            .is_some_and(|o| self.row(o[1], o[2]).binary_search(&x32(o[0])).is_ok())
     }
 
     /// Calls `visit` on the occupied cells with keys in the half-open box `lo..hi` until it
@@ -811,8 +840,8 @@ impl DistanceField {
         hi: [i64; 3],
         mut visit: impl FnMut([i64; 3]) -> bool,
     ) -> bool {
-        let lo = [0, 1, 2].map(|a| (lo[a] - self.min[a]).max(0) as usize);
-        let hi = [0, 1, 2].map(|a| (hi[a] - self.min[a]).clamp(0, self.dims[a] as i64) as usize);
+        let lo = [0, 1, 2].map(|a| offset((lo[a] - self.min[a]).max(0)));
+        let hi = [0, 1, 2].map(|a| offset((hi[a] - self.min[a]).clamp(0, self.dims[a] as i64)));
         if (0..3).any(|a| lo[a] >= hi[a]) {
             return false;
         }
@@ -913,7 +942,7 @@ impl DistanceField {
             // occupied cell (the distances can only shrink as it widens); with none found,
             // the border grows by a factor.
             pad = if undecided < FAR / 2.0 {
-                (undecided.sqrt().ceil() as usize).max(pad + 1)
+                to_usize(f64::from(undecided.sqrt().ceil())).max(pad + 1)
             } else {
                 pad * PAD_GROWTH
             };
@@ -1046,7 +1075,7 @@ mod dense {
                 .collect();
             Columns {
                 dims,
-                voxel: v as f32,
+                voxel: to_f32(v),
                 planes: planes(min, dims, keys),
                 tiles_x,
                 tiles,
@@ -1113,7 +1142,7 @@ mod dense {
                 }
                 edt_1d(&f, &mut out, &mut vs, &mut zs);
                 for (z, &q) in out.iter().enumerate() {
-                    dist[(y * nz + z) * nx + x] = distance(q, v as f32);
+                    dist[(y * nz + z) * nx + x] = distance(q, to_f32(v));
                 }
             }
         }
@@ -1130,9 +1159,9 @@ mod dense {
         let mut d = vec![FAR; nx * ny * nz];
         for k in keys {
             let (x, y, z) = (
-                (k[0] - min[0]) as usize,
-                (k[1] - min[1]) as usize,
-                (k[2] - min[2]) as usize,
+                offset(k[0] - min[0]),
+                offset(k[1] - min[1]),
+                offset(k[2] - min[2]),
             );
             d[(z * ny + y) * nx + x] = 0.0;
         }
@@ -1153,7 +1182,7 @@ mod dense {
         // first pass and stays FAR (the transform of a constant FAR line is FAR).
         let mut slab_used = vec![false; nz];
         for k in keys {
-            slab_used[(k[2] - min[2]) as usize] = true;
+            slab_used[offset(k[2] - min[2])] = true;
         }
         d.par_chunks_mut(nx * ny)
             .zip(slab_used.par_iter())
@@ -1505,10 +1534,7 @@ mod tests {
                     .iter()
                     .map(|k| [0, 1, 2].map(|a| k[a] + shift[a]))
                     .collect();
-                let ivs: Vec<IVector> = keys
-                    .iter()
-                    .map(|k| IVector::new(k[0] as i32, k[1] as i32, k[2] as i32))
-                    .collect();
+                let ivs: Vec<IVector> = keys.iter().map(|&k| ivector(k)).collect();
                 let want = Voxels::new(Vector::splat(v), &ivs).local_aabb();
                 let lo = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).min().unwrap());
                 let hi = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).max().unwrap());

@@ -8,6 +8,7 @@ use std::hash::{BuildHasherDefault, Hasher};
 use nalgebra::Point3;
 
 use crate::cloud::PointCloud;
+use crate::num::to_i64;
 
 /// Parameters of the region growing (section 4.5).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -50,9 +51,9 @@ pub fn segment(
     let cell = cfg.grow_distance.max(1e-6);
     let key = |p: &Point3<f64>| {
         (
-            (p.x / cell).floor() as i64,
-            (p.y / cell).floor() as i64,
-            (p.z / cell).floor() as i64,
+            to_i64((p.x / cell).floor()),
+            to_i64((p.y / cell).floor()),
+            to_i64((p.z / cell).floor()),
         )
     };
     let mut grid: HashMap<(i64, i64, i64), Vec<usize>, BuildHasherDefault<CellHasher>> =
@@ -65,7 +66,7 @@ pub fn segment(
     let r2 = cfg.grow_distance * cfg.grow_distance;
     for (s, seed) in seeds.iter().enumerate() {
         let mut queue: Vec<usize> = Vec::new();
-        let reach = (cfg.seed_radius / cell).ceil() as i64;
+        let reach = to_i64((cfg.seed_radius / cell).ceil());
         let k = key(seed);
         for dz in -reach..=reach {
             for dy in -reach..=reach {

@@ -14,6 +14,7 @@ use crate::method::fit::{ContactConfig, Fit};
 use crate::method::scene::Scene;
 use crate::model::agent::{Agent, Cylinder, FkCache, Placement, Posture};
 use crate::model::hierarchy::{Fallback, Hierarchy, Node, Spread};
+use crate::num::to_usize;
 
 /// The outcome of one node.
 #[derive(Debug, Clone, PartialEq)]
@@ -260,7 +261,7 @@ impl NodeContext<'_> {
                     .find(|(l, _)| *l == c.joint)
                     .map_or([0.0, 1.0], |m| m.1);
                 let d = c.b - c.a;
-                let n = ((d.norm() * (s1 - s0)) / step).ceil().max(1.0) as usize;
+                let n = to_usize(((d.norm() * (s1 - s0)) / step).ceil().max(1.0));
                 (0..=n).any(|i| {
                     let q = c.a + d * (s0 + (s1 - s0) * i as f64 / n as f64);
                     scene.drop_below(&q, c.radius + node.support_gap) - c.radius <= node.support_gap

@@ -714,11 +714,11 @@ link = { name = "shank", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius 
             match step % 4 {
                 0 => place.position.z -= rnd() * 0.01,
                 1 => {
-                    let j = (rnd() * a.joints.len() as f64) as usize % a.joints.len();
+                    let j = crate::num::to_usize(rnd() * a.joints.len() as f64) % a.joints.len();
                     posture.angles[j] = rnd() * 3.0 - 1.5;
                 }
                 2 if rnd() < 0.3 => {
-                    let j = (rnd() * a.joints.len() as f64) as usize % a.joints.len();
+                    let j = crate::num::to_usize(rnd() * a.joints.len() as f64) % a.joints.len();
                     posture.axes[j] = Unit::new_normalize(Vector3::new(rnd(), rnd(), 0.5));
                 }
                 _ if rnd() < 0.2 => place.yaw = rnd() * 6.0,

@@ -9,6 +9,7 @@ use nalgebra::{Point3, Vector3};
 use crate::cloud::{CloudError, Scalar};
 use crate::detect::Detection;
 use crate::model::agent::Cylinder;
+use crate::num::{index32, to_f32};
 use crate::report::render::Legend;
 
 /// Segments around the circumference of every body part in [`agent_mesh_ply`].
@@ -44,7 +45,7 @@ pub fn cylinder_mesh(c: &Cylinder, segments: usize) -> (Vec<Point3<f64>>, Vec<[u
     }
     verts.push(c.a);
     verts.push(c.b);
-    let n32 = n as u32;
+    let n32 = index32(n);
     let (ca, cb) = (2 * n32, 2 * n32 + 1);
     let mut faces = Vec::with_capacity(4 * n);
     for i in 0..n32 {
@@ -82,7 +83,7 @@ pub fn agent_mesh_bytes(detections: &[Detection], legend: &Legend) -> Vec<u8> {
         let colour = legend.colour(&d.affordances);
         for c in &d.parts {
             let (v, f) = cylinder_mesh(c, SEGMENTS);
-            let base = verts.len() as u32;
+            let base = index32(verts.len());
             faces.extend(f.iter().map(|t| t.map(|i| i + base)));
             verts.extend(v.into_iter().map(|p| (p, colour)));
         }
@@ -91,7 +92,7 @@ pub fn agent_mesh_bytes(detections: &[Detection], legend: &Legend) -> Vec<u8> {
     out.reserve(15 * verts.len() + 13 * faces.len());
     for (p, c) in &verts {
         for k in 0..3 {
-            out.extend_from_slice(&(p[k] as f32).to_le_bytes());
+            out.extend_from_slice(&to_f32(p[k]).to_le_bytes());
         }
         out.extend_from_slice(c);
     }

@@ -16,6 +16,7 @@ use nalgebra::Point3;
 use serde_json::{json, Value};
 
 use crate::detect::Detection;
+use crate::num::{index32, to_f32};
 use crate::report::agent_mesh::{cylinder_mesh, SEGMENTS, UNLABELLED};
 use crate::report::render::Legend;
 
@@ -118,13 +119,15 @@ fn round(x: f64, d: i32) -> f64 {
 }
 
 /// The bytes of the `.glb` of `detections` found in `file`; with `points` (the cloud, and
-/// per point the detection whose segment holds it), the cloud as coloured points too.
+/// per point the detection whose segment holds it), the cloud as coloured points too. An
+/// error (`InvalidInput`) when they would be 4 GiB or more, which the container's 32-bit
+/// lengths cannot say.
 pub fn agents_glb(
     file: &str,
     detections: &[Detection],
     legend: &Legend,
     points: Option<ScenePoints>,
-) -> Vec<u8> {
+) -> std::io::Result<Vec<u8>> {
     let mut b = Builder::default();
     let mut materials: Vec<Value> = Vec::new();
     let mut material_of: Vec<[u8; 3]> = Vec::new();
@@ -147,9 +150,9 @@ pub fn agents_glb(
         let mut tris: Vec<[u32; 3]> = Vec::new();
         for c in &d.parts {
             let (v, f) = cylinder_mesh(c, SEGMENTS);
-            let base = verts.len() as u32;
+            let base = index32(verts.len());
             tris.extend(f.iter().map(|t| t.map(|k| k + base)));
-            verts.extend(v.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]));
+            verts.extend(v.iter().map(|p| [to_f32(p.x), to_f32(p.y), to_f32(p.z)]));
         }
         let position = [0, 1, 2].map(|k| round(d.position[k], 4));
         let mut node = json!({
@@ -185,7 +188,7 @@ pub fn agents_glb(
             .collect();
         let verts: Vec<[f32; 3]> = pts
             .iter()
-            .map(|p| [p.x as f32, p.y as f32, p.z as f32])
+            .map(|p| [to_f32(p.x), to_f32(p.y), to_f32(p.z)])
             .collect();
         let rgb: Vec<[f32; 3]> = (0..pts.len())
             .map(|k| {
@@ -195,7 +198,7 @@ pub fn agents_glb(
                     .flatten()
                     .and_then(|i| colours.get(i).copied())
                     .unwrap_or(UNLABELLED);
-                c.map(|v| srgb_to_linear(v) as f32)
+                c.map(|v| to_f32(srgb_to_linear(v)))
             })
             .collect();
         let pos = b.vec3(&verts);
@@ -245,19 +248,29 @@ pub fn agents_glb(
         bin.push(0);
     }
     let total = 12 + 8 + text.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+    // Every length below is at most `total`.
+    let len32 = |n: usize| {
+        u32::try_from(n).map_err(|_| {
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!("{total} bytes: a glTF binary file holds less than 4 GiB"),
+            )
+        })
+    };
+    let total32 = len32(total)?;
     let mut out = Vec::with_capacity(total);
     out.extend(b"glTF");
     out.extend(2u32.to_le_bytes());
-    out.extend((total as u32).to_le_bytes());
-    out.extend((text.len() as u32).to_le_bytes());
+    out.extend(total32.to_le_bytes());
+    out.extend(len32(text.len())?.to_le_bytes());
     out.extend(b"JSON");
     out.extend(text);
     if !bin.is_empty() {
-        out.extend((bin.len() as u32).to_le_bytes());
+        out.extend(len32(bin.len())?.to_le_bytes());
         out.extend(b"BIN\0");
         out.extend(bin);
     }
-    out
+    Ok(out)
 }
 
 /// Writes [`agents_glb`] to `path` through a temporary file and a rename.
@@ -268,7 +281,7 @@ pub fn write_agents_glb(
     legend: &Legend,
     points: Option<ScenePoints>,
 ) -> std::io::Result<()> {
-    crate::report::atomic::write_bytes(path, &agents_glb(file, detections, legend, points))
+    crate::report::atomic::write_bytes(path, &agents_glb(file, detections, legend, points)?)
 }
 
 #[cfg(test)]
@@ -284,7 +297,7 @@ mod tests {
 
     #[test]
     fn empty_is_a_valid_header_and_json_chunk() {
-        let g = agents_glb("x.ply", &[], &Legend::default(), None);
+        let g = agents_glb("x.ply", &[], &Legend::default(), None).unwrap();
         assert_eq!(&g[..4], b"glTF");
         assert_eq!(
             u32::from_le_bytes(g[8..12].try_into().unwrap()) as usize,

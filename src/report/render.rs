@@ -14,6 +14,7 @@ use crate::detect::{Detection, Outcome, Prepared};
 use crate::method::heightmap::HeightMap;
 use crate::method::hypotheses::Hypothesis;
 use crate::model::hierarchy::Hierarchy;
+use crate::num::{to_i64, to_usize};
 
 /// An RGB image, 8 bits per channel, row-major from the top-left corner.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -118,24 +119,43 @@ pub fn viridis(t: f64) -> [u8; 3] {
         0.0
     };
     let x = t * (STOPS.len() - 1) as f64;
-    let i = (x.floor() as usize).min(STOPS.len() - 2);
+    let i = to_usize(x.floor()).min(STOPS.len() - 2);
     let f = x - i as f64;
     let mut c = [0u8; 3];
     for (k, v) in c.iter_mut().enumerate() {
-        *v = (STOPS[i][k] * (1.0 - f) + STOPS[i + 1][k] * f).round() as u8;
+        *v = channel(STOPS[i][k] * (1.0 - f) + STOPS[i + 1][k] * f);
     }
     c
 }
 
+/// A colour channel from a value on the 0-255 scale: rounded and clamped, which is what
+/// `as` does (it saturates) made explicit.
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+fn channel(v: f64) -> u8 {
+    // Clamped to 0..=255 first: the cast drops nothing.
+    v.round().clamp(0.0, 255.0) as u8
+}
+
+/// A pixel coordinate already checked to lie in the image (so at least 0), as an index.
+fn ix(v: i64) -> usize {
+    usize::try_from(v).unwrap_or(0)
+}
+
+/// A size in pixels (cells of a height map, images of a panel), saturating: the extent
+/// guard keeps a height map under 90 million cells, far below `u32::MAX`.
+fn px(n: usize) -> u32 {
+    u32::try_from(n).unwrap_or(u32::MAX)
+}
+
 fn scale_colour(c: [u8; 3], f: f64) -> [u8; 3] {
-    c.map(|v| (v as f64 * f).round().clamp(0.0, 255.0) as u8)
+    c.map(|v| channel(v as f64 * f))
 }
 
 fn mix(a: [u8; 3], b: [u8; 3], t: f64) -> [u8; 3] {
     let t = t.clamp(0.0, 1.0);
     let mut c = [0u8; 3];
     for k in 0..3 {
-        c[k] = (a[k] as f64 * (1.0 - t) + b[k] as f64 * t).round() as u8;
+        c[k] = channel(a[k] as f64 * (1.0 - t) + b[k] as f64 * t);
     }
     c
 }
@@ -180,7 +200,7 @@ impl Image {
         if x < 0 || y < 0 || x >= self.width as i64 || y >= self.height as i64 || alpha <= 0.0 {
             return;
         }
-        let i = 3 * (y as usize * self.width as usize + x as usize);
+        let i = 3 * (ix(y) * self.width as usize + ix(x));
         let old = [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]];
         let new = mix(old, c, alpha);
         self.rgb[i..i + 3].copy_from_slice(&new);
@@ -214,10 +234,10 @@ impl Image {
         if !(lo.x.is_finite() && hi.x.is_finite() && lo.y.is_finite() && hi.y.is_finite()) {
             return;
         }
-        let x0 = ((lo.x - pad).floor() as i64).max(0);
-        let y0 = ((lo.y - pad).floor() as i64).max(0);
-        let x1 = ((hi.x + pad).ceil() as i64).min(self.width as i64 - 1);
-        let y1 = ((hi.y + pad).ceil() as i64).min(self.height as i64 - 1);
+        let x0 = to_i64((lo.x - pad).floor()).max(0);
+        let y0 = to_i64((lo.y - pad).floor()).max(0);
+        let x1 = to_i64((hi.x + pad).ceil()).min(self.width as i64 - 1);
+        let y1 = to_i64((hi.y + pad).ceil()).min(self.height as i64 - 1);
         for y in y0..=y1 {
             for x in x0..=x1 {
                 f(self, x, y, Point2::new(x as f64 + 0.5, y as f64 + 0.5));
@@ -373,7 +393,7 @@ pub fn heightmap_image(
     scale: u32,
 ) -> Image {
     let scale = scale.max(1);
-    let (mw, mh) = (map.nx as u32 * scale, map.ny as u32 * scale);
+    let (mw, mh) = (px(map.nx) * scale, px(map.ny) * scale);
     let mut img = Image::new(mw.max(LEGEND_MIN_WIDTH), mh + LEGEND_HEIGHT, BACKGROUND);
     let (lo, hi) = map
         .heights
@@ -457,7 +477,7 @@ pub fn heightmap_image(
         let label = format!("{i}");
         let at = seat
             - nalgebra::Vector2::new(d.yaw.cos(), -d.yaw.sin()) * (SEAT_RADIUS * px_per_m + 10.0);
-        let (lx, ly) = (at.x as i64 - 5 * label.len() as i64, at.y as i64 - 7);
+        let (lx, ly) = (to_i64(at.x) - 5 * label.len() as i64, to_i64(at.y) - 7);
         for (dx, dy) in [
             (-1, 0),
             (1, 0),
@@ -604,22 +624,22 @@ pub fn scene_image(
     let dspan = (hi[2] - lo[2]).max(1e-6);
     let mut zbuf = vec![f64::NEG_INFINITY; width as usize * height as usize];
     // Splats of about 1 cm, 1 to 3 pixels.
-    let splat = ((0.008 * k).round() as i64).clamp(1, 3);
+    let splat = to_i64((0.008 * k).round()).clamp(1, 3);
     for p in &cloud.points {
         let (s, t, depth) = proj(p);
         let q = to_px(s, t);
         let fog = 0.6 + 0.4 * (depth - lo[2]) / dspan;
         let c = scale_colour(mix(viridis((p.z - zlo) / zspan), [255; 3], 0.15), fog);
         let (x0, y0) = (
-            (q.x - splat as f64 / 2.0).round() as i64,
-            (q.y - splat as f64 / 2.0).round() as i64,
+            to_i64((q.x - splat as f64 / 2.0).round()),
+            to_i64((q.y - splat as f64 / 2.0).round()),
         );
         for y in y0..y0 + splat {
             for x in x0..x0 + splat {
                 if x < 0 || y < 0 || x >= width as i64 || y >= height as i64 {
                     continue;
                 }
-                let i = y as usize * width as usize + x as usize;
+                let i = ix(y) * width as usize + ix(x);
                 if depth > zbuf[i] {
                     zbuf[i] = depth;
                     img.set(x, y, c);
@@ -647,7 +667,7 @@ pub fn scene_image(
                 if dist > r + 0.5 {
                     return;
                 }
-                let i = y as usize * width as usize + x as usize;
+                let i = ix(y) * width as usize + ix(x);
                 let h = (1.0 - (dist / r).min(1.0).powi(2)).sqrt();
                 let depth = da + (db - da) * t + h * c.radius;
                 if depth <= zbuf[i] {
@@ -681,7 +701,7 @@ pub fn scene_image(
 pub fn panel(images: &[Image]) -> Image {
     const GAP: u32 = 6;
     let width =
-        images.iter().map(|i| i.width).sum::<u32>() + GAP * images.len().saturating_sub(1) as u32;
+        images.iter().map(|i| i.width).sum::<u32>() + GAP * px(images.len().saturating_sub(1));
     let height = images.iter().map(|i| i.height).max().unwrap_or(0);
     let mut out = Image::new(width, height, BACKGROUND);
     let mut x0 = 0usize;
@@ -699,7 +719,7 @@ pub fn panel(images: &[Image]) -> Image {
 /// The cell size in pixels that makes a height map of `nx` x `ny` cells about `target`
 /// pixels on its longer side (1 to 16).
 pub fn auto_scale(nx: usize, ny: usize, target: u32) -> u32 {
-    let n = nx.max(ny).max(1) as u32;
+    let n = px(nx.max(ny).max(1));
     (target / n).clamp(1, 16)
 }
 

@@ -22,7 +22,7 @@ pub(crate) fn baseline(path: &Path) -> BTreeMap<(u32, String), f64> {
         }
         let height: f64 = row[h].parse().unwrap();
         out.insert(
-            ((height * 1000.0).round() as u32, row[id].to_string()),
+            (millimetres(height), row[id].to_string()),
             row[f].parse().unwrap(),
         );
     }
@@ -47,7 +47,7 @@ pub(crate) fn drops_below(
     let mut drops = Vec::new();
     for hr in &ev.heights {
         for s in &hr.scores {
-            let key = ((hr.height * 1000.0).round() as u32, s.id.clone());
+            let key = (millimetres(hr.height), s.id.clone());
             match (base.get(&key), s.f) {
                 // Baseline values are printed to 4 decimals.
                 (Some(&b), Some(f)) if f < b - 5e-5 => drops.push(format!(
@@ -65,4 +65,11 @@ pub(crate) fn drops_below(
         }
     }
     drops
+}
+
+/// A body height (metres, 0.3 to 3.0) in whole millimetres, as a map key.
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+fn millimetres(height: f64) -> u32 {
+    // At most 3000: a u32 holds it.
+    (height * 1000.0).round() as u32
 }

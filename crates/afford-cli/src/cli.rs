@@ -9,11 +9,15 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use crate::batch::{BatchError, Shard};
-use crate::run::{run_detect, run_inspect, DetectRequest, InspectRequest};
+use crate::run::{
+    error_line, run_convert, run_detect, run_eval, run_inspect, run_synth, ConvertRequest,
+    DetectRequest, EvalRequest, InspectRequest, Outcome, StdoutError, SynthRequest,
+};
 use crate::settings::Settings;
-use afford::cloud::{parse_matrix, FloorMode, FrameOptions, Units, Up};
+use afford::cloud::frame::{parse_matrix, FloorMode, FrameOptions, Units, Up};
 use afford::input::InputOptions;
 use afford::model::set::ModelChoice;
+use anyhow::{bail, Context};
 use clap::{Parser, Subcommand};
 
 /// Finds where a person could sit or lie in a 3D point cloud, and how.
@@ -131,13 +135,13 @@ struct ModelArgs {
 
 /// The one place where the flags `detect`, `inspect` and `eval` share become the library's
 /// validated [`Settings`].
-fn settings(models: &ModelArgs, input: &InputArgs) -> Result<Settings, String> {
+fn settings(models: &ModelArgs, input: &InputArgs) -> anyhow::Result<Settings> {
     let choice = ModelChoice {
         agents: models.agent.clone(),
         hierarchies: models.affordances.clone(),
         heights: models.height.clone(),
     };
-    Settings::new(choice, models.voxel, input.options()?).map_err(|e| e.to_string())
+    Ok(Settings::new(choice, models.voxel, input.options()?)?)
 }
 
 #[derive(clap::Args)]
@@ -165,29 +169,31 @@ struct InputArgs {
 }
 
 impl InputArgs {
-    fn options(&self) -> Result<InputOptions, String> {
+    fn options(&self) -> anyhow::Result<InputOptions> {
         let transform = match &self.transform {
             None => None,
             Some(t) => {
                 let path = std::path::Path::new(t);
                 let text = if path.is_file() {
-                    std::fs::read_to_string(path).map_err(|e| format!("--transform {t}: {e}"))?
+                    std::fs::read_to_string(path).with_context(|| format!("--transform {t}"))?
                 } else {
                     t.clone()
                 };
-                Some(parse_matrix(&text).map_err(|e| {
-                    // Not 16 numbers and no such file: most likely a mistyped file name.
-                    let numeric = t.chars().any(|c| c.is_ascii_digit())
-                        && t.split(|c: char| c.is_whitespace() || ",;[]".contains(c))
-                            .filter(|w| !w.is_empty())
-                            .count()
-                            > 1;
-                    if numeric {
-                        format!("--transform {t}: {e}")
-                    } else {
-                        format!("--transform {t}: no such file, and not a matrix of 16 numbers")
+                match parse_matrix(&text) {
+                    Ok(m) => Some(m),
+                    Err(e) => {
+                        // Not 16 numbers and no such file: most likely a mistyped file name.
+                        let numeric = t.chars().any(|c| c.is_ascii_digit())
+                            && t.split(|c: char| c.is_whitespace() || ",;[]".contains(c))
+                                .filter(|w| !w.is_empty())
+                                .count()
+                                > 1;
+                        if numeric {
+                            bail!("--transform {t}: {e}");
+                        }
+                        bail!("--transform {t}: no such file, and not a matrix of 16 numbers");
                     }
-                })?)
+                }
             }
         };
         Ok(InputOptions {
@@ -344,6 +350,11 @@ fn parse_voxel(s: &str) -> Result<f64, String> {
 /// Runs the command line on `args` (the program name first, as `std::env::args_os`
 /// gives them) and returns the process exit code: 0 when everything was done, 2 when
 /// anything failed (docs/batch.md).
+///
+/// This is the edge where errors become exit codes: an error that ends a command is
+/// printed here as one line ([`error_line`]), exit code 2, except that standard output
+/// whose reader went away (`afford detect ... | head`) ends quietly with 0. The commands
+/// below return typed errors with context ([`anyhow`]); the libraries keep typed errors.
 pub fn main<I, T>(args: I) -> u8
 where
     I: IntoIterator<Item = T>,
@@ -360,23 +371,31 @@ where
     // Standard error carries the diagnostics: when it cannot be written, the exit code is
     // all that is left, so its write errors are not reported further.
     let (mut out, mut err) = (std::io::stdout().lock(), std::io::stderr().lock());
-    match cli.command {
+    match run(cli.command, &mut out, &mut err) {
+        Ok(outcome) => outcome.code(),
+        Err(e)
+            if e.downcast_ref::<StdoutError>()
+                .is_some_and(StdoutError::reader_gone) =>
+        {
+            0
+        }
+        Err(e) => {
+            let _ = err.write_all(error_line(&e).as_bytes());
+            2
+        }
+    }
+}
+
+/// Turns the flags of one command into its validated request and runs it.
+fn run(command: Command, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
+    match command {
         Command::Detect(a) => {
-            let settings = match settings(&a.models, &a.input) {
-                Ok(i) => i,
-                Err(e) => {
-                    let _ = writeln!(err, "error: {e}");
-                    return 2;
-                }
-            };
+            let settings = settings(&a.models, &a.input)?;
             if let Some(n) = a.threads {
-                if let Err(e) = rayon::ThreadPoolBuilder::new()
+                rayon::ThreadPoolBuilder::new()
                     .num_threads(n)
                     .build_global()
-                {
-                    let _ = writeln!(err, "error: --threads {n}: {e}");
-                    return 2;
-                }
+                    .with_context(|| format!("--threads {n}"))?;
             }
             let req = DetectRequest {
                 files: a.files,
@@ -394,81 +413,51 @@ where
                 mesh_scene: a.mesh_scene,
                 progress: !a.quiet && std::io::stderr().is_terminal(),
             };
-            let code = run_detect(&req, &mut out, &mut err);
-            code as u8
+            run_detect(&req, out, err)
         }
-        Command::Synth(a) => {
-            let code = crate::run::run_synth(
-                &crate::run::SynthRequest {
-                    out: a.out,
-                    seed: a.seed,
-                    count: a.count,
-                    meshes: a.mesh,
-                    models: a.models,
-                    views: a.views,
-                    stride: a.stride,
-                    wide: a.mix == "wide",
-                    camera_frame: a.frame == "camera",
-                },
-                &mut out,
-                &mut err,
-            );
-            code as u8
-        }
+        Command::Synth(a) => run_synth(
+            &SynthRequest {
+                out: a.out,
+                seed: a.seed,
+                count: a.count,
+                meshes: a.mesh,
+                models: a.models,
+                views: a.views,
+                stride: a.stride,
+                wide: a.mix == "wide",
+                camera_frame: a.frame == "camera",
+            },
+            out,
+            err,
+        ),
         Command::Eval(a) => {
-            let settings = match settings(&a.models, &a.input) {
-                Ok(i) => i,
-                Err(e) => {
-                    let _ = writeln!(err, "error: {e}");
-                    return 2;
-                }
+            let settings = settings(&a.models, &a.input)?;
+            let req = EvalRequest {
+                labels: a.labels,
+                settings,
+                json: a.json,
+                csv: a.csv,
+                from: a.from,
+                quiet: a.quiet || !std::io::stderr().is_terminal(),
             };
-            let code = crate::run::run_eval(
-                &crate::run::EvalRequest {
-                    labels: a.labels,
-                    settings,
-                    json: a.json,
-                    csv: a.csv,
-                    from: a.from,
-                    quiet: a.quiet || !std::io::stderr().is_terminal(),
-                },
-                &mut out,
-                &mut err,
-            );
-            code as u8
+            run_eval(&req, out, err)
         }
         Command::Convert(a) => {
-            let options = match a.input_frame.options() {
-                Ok(i) => i,
-                Err(e) => {
-                    let _ = writeln!(err, "error: {e}");
-                    return 2;
-                }
-            };
-            let req = crate::run::ConvertRequest {
+            let req = ConvertRequest {
                 input: a.input,
                 output: a.output,
                 ascii: a.ascii,
-                options,
+                options: a.input_frame.options()?,
             };
-            let code = crate::run::run_convert(&req, &mut out, &mut err);
-            code as u8
+            run_convert(&req, out, err)
         }
         Command::Inspect(a) => {
-            let settings = match settings(&a.models, &a.input) {
-                Ok(i) => i,
-                Err(e) => {
-                    let _ = writeln!(err, "error: {e}");
-                    return 2;
-                }
-            };
             let req = InspectRequest {
-                settings,
+                settings: settings(&a.models, &a.input)?,
                 file: a.file,
                 png: a.png,
             };
-            let code = run_inspect(&req, &mut out, &mut err);
-            code as u8
+            run_inspect(&req, out, err)
         }
     }
 }

@@ -1,8 +1,13 @@
-//! The commands as functions that return the exit code; `detect`: loads the models once, runs every input
-//! file independently (one bad file does not stop the others), and writes the outputs.
+//! The commands as functions. Each returns its [`Outcome`] when it ran to its end, or the
+//! error that ended it, which the edge ([`crate::cli::main`]) prints as one line with exit
+//! code 2. Errors a command goes on after (one input of many, one output) are reported
+//! here as they happen. `detect`: loads the models once, runs every input file
+//! independently (one bad file does not stop the others), and writes the outputs.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
 
 use crate::batch::{self, LogLine, Shard, Status};
 use crate::settings::Settings;
@@ -47,6 +52,74 @@ pub struct DetectRequest {
     /// Show a progress bar on stderr when there are several inputs (the caller says
     /// whether stderr is a terminal and the user did not ask for quiet).
     pub progress: bool,
+}
+
+/// How a command that ran to its end ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// Everything asked was done (or skipped by `--resume`), or the reader of standard
+    /// output went away (a closed pipe ends a run quietly, as a filter does).
+    Done,
+    /// Some input or output failed; each was reported on standard error as it happened.
+    Failed,
+}
+
+impl Outcome {
+    /// [`Outcome::Failed`] when `failed`.
+    fn of(failed: bool) -> Outcome {
+        if failed {
+            Outcome::Failed
+        } else {
+            Outcome::Done
+        }
+    }
+
+    /// The process exit code: 0 done, 2 failed (as for an error that ends a command).
+    pub fn code(self) -> u8 {
+        match self {
+            Outcome::Done => 0,
+            Outcome::Failed => 2,
+        }
+    }
+}
+
+/// Standard output could not be written. The edge ([`crate::cli::main`]) ends quietly with
+/// exit code 0 when the reader went away ([`StdoutError::reader_gone`]).
+#[derive(Debug, thiserror::Error)]
+#[error("standard output: cannot write: {0}")]
+pub struct StdoutError(#[source] pub std::io::Error);
+
+impl StdoutError {
+    /// Whether the reader of the output went away (a closed pipe: `afford detect ... |
+    /// head`): the run then stops without a message, as a filter does.
+    pub fn reader_gone(&self) -> bool {
+        reader_gone(&self.0)
+    }
+}
+
+/// The one line that reports `e` on standard error, for an error that ends a command (at
+/// the edge) or one it goes on after: `error: ` and the messages of `e`'s chain, outermost
+/// first, joined by `: `, with control characters escaped ([`batch::printable`]). The
+/// chain stops at an error whose message already ends with its cause's (the library's
+/// errors say their cause), so no cause is said twice.
+pub fn error_line(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let said = cause.to_string();
+        if !text.is_empty() {
+            if text.ends_with(&said) {
+                break;
+            }
+            text.push_str(": ");
+        }
+        text.push_str(&said);
+    }
+    format!("error: {}\n", batch::printable(&text))
+}
+
+/// Reports `e` on `err` ([`error_line`]) for a command that goes on after it.
+fn report_error(err: &mut dyn Write, e: &anyhow::Error) {
+    let _ = err.write_all(error_line(e).as_bytes());
 }
 
 /// Detects in one file (already in metres, z up, floor at z = 0) with every model.
@@ -127,11 +200,17 @@ pub fn per_part_path(base: &Path, input: &Path, part: Option<&str>, several: boo
     base.with_file_name(format!("{stem}.{inp}{part}.{ext}"))
 }
 
-/// Runs `afford detect`; returns the process exit code (0 every input done or skipped, 2
-/// any failure). Inputs run one after the other; as each ends, its table (when no output
+/// Runs `afford detect`: [`Outcome::Done`] when every input was done or skipped,
+/// [`Outcome::Failed`] when any input or output failed; an error for wrong flags, models or
+/// lists (before any input), or for standard output that could not be written (at the end).
+/// Inputs run one after the other; as each ends, its table (when no output
 /// file is asked for) or its `--log-json` line goes to `out`, and its diagnostics to `err`.
 /// The run-wide outputs (`--json`, `--csv`, `--summary`) are written at the end.
-pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+pub fn run_detect(
+    req: &DetectRequest,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
     if req.mesh_scene
         && !req
             .mesh
@@ -139,45 +218,19 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
             .and_then(|m| m.extension())
             .is_some_and(|e| e.eq_ignore_ascii_case("glb"))
     {
-        let _ = writeln!(
-            err,
-            "error: --mesh-scene puts the cloud into a glTF mesh: give --mesh NAME.glb"
-        );
-        return 2;
+        bail!("--mesh-scene puts the cloud into a glTF mesh: give --mesh NAME.glb");
     }
     if req.resume && req.out_dir.is_none() {
-        let _ = writeln!(
-            err,
-            "error: --resume needs --out-dir (where the saved results are)"
-        );
-        return 2;
+        bail!("--resume needs --out-dir (where the saved results are)");
     }
-    let models = match req.settings.models.load() {
-        Ok(m) => m,
-        Err(e) => {
-            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-            return 2;
-        }
-    };
-    let inputs = match batch::gather(&req.files, &req.lists, req.shard, req.out_dir.is_some()) {
-        Ok(i) => i,
-        Err(e) => {
-            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-            return 2;
-        }
-    };
+    let models = req.settings.models.load()?;
+    let inputs = batch::gather(&req.files, &req.lists, req.shard, req.out_dir.is_some())?;
     if let Some(d) = &req.out_dir {
-        if let Err(e) = std::fs::create_dir_all(d) {
-            let _ = writeln!(err, "error: {}: cannot create: {e}", d.display());
-            return 2;
-        }
+        std::fs::create_dir_all(d).with_context(|| format!("{}: cannot create", d.display()))?;
     }
     let files = &inputs.files;
     let several = inputs.total > 1;
-    if let Err(e) = check_outputs(req, files, several) {
-        let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-        return 2;
-    }
+    check_outputs(req, files, several)?;
     // The first error writing standard output: a closed pipe (`| head`) stops the run
     // quietly, any other (a full disk) is reported at the end.
     let mut out_error: Option<std::io::Error> = None;
@@ -286,7 +339,7 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
         bar.inc(1);
         if out_error.as_ref().is_some_and(reader_gone) {
             bar.finish_and_clear();
-            return if failed > 0 { 2 } else { 0 };
+            return Ok(Outcome::of(failed > 0));
         }
     }
     bar.finish_and_clear();
@@ -297,7 +350,10 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
                 afford::report::atomic::write_bytes(p, t.as_bytes()).map_err(|e| e.to_string())
             });
             if let Err(e) = done {
-                let _ = writeln!(err, "error: {}: cannot write: {e}", p.display());
+                report_error(
+                    err,
+                    &anyhow::anyhow!(e).context(format!("{}: cannot write", p.display())),
+                );
                 unwritten += 1;
             }
         }
@@ -335,14 +391,10 @@ pub fn run_detect(req: &DetectRequest, out: &mut dyn Write, err: &mut dyn Write)
         }
         let _ = writeln!(err, "{s}");
     }
-    if let Some(e) = &out_error {
-        unwritten += usize::from(stdout_failed(e, err) != 0);
+    if let Some(e) = out_error {
+        return Err(StdoutError(e).into());
     }
-    if failed + unwritten > 0 {
-        2
-    } else {
-        0
-    }
+    Ok(Outcome::of(failed + unwritten > 0))
 }
 
 /// Whether a write error means that the reader of the output went away (a closed pipe:
@@ -351,24 +403,11 @@ pub fn reader_gone(e: &std::io::Error) -> bool {
     e.kind() == std::io::ErrorKind::BrokenPipe
 }
 
-/// The exit code for an error writing standard output: 0 when the reader went away
-/// ([`reader_gone`]), otherwise 2 after one line on `err`.
-pub fn stdout_failed(e: &std::io::Error, err: &mut dyn Write) -> i32 {
-    if reader_gone(e) {
-        return 0;
-    }
-    // Standard error is where errors go; when it cannot be written either, the exit code
-    // is all that is left.
-    let _ = writeln!(err, "error: standard output: cannot write: {e}");
-    2
-}
-
-/// Writes `text` to standard output (`out`), flushed: `Ok` when written, otherwise the
-/// exit code of [`stdout_failed`].
-fn print(out: &mut dyn Write, err: &mut dyn Write, text: &str) -> Result<(), i32> {
+/// Writes `text` to standard output (`out`), flushed.
+fn print(out: &mut dyn Write, text: &str) -> Result<(), StdoutError> {
     out.write_all(text.as_bytes())
         .and_then(|()| out.flush())
-        .map_err(|e| stdout_failed(&e, err))
+        .map_err(StdoutError)
 }
 
 /// Checks that the saved result `saved` (an `--out-dir` JSON) was made with the bodies and
@@ -408,7 +447,7 @@ fn check_saved_models(saved: &Path, models: &[Model]) -> Result<(), String> {
 /// `--csv`, `--summary`, or the per-input `--segments`/`--mesh` file of any input) that is
 /// one of the inputs, and two inputs whose per-input outputs share a name
 /// ([`per_input_path`] uses the file stem: `a/chair.ply` and `b/chair.pcd` clash).
-fn check_outputs(req: &DetectRequest, files: &[PathBuf], several: bool) -> Result<(), String> {
+fn check_outputs(req: &DetectRequest, files: &[PathBuf], several: bool) -> anyhow::Result<()> {
     let mut targets: Vec<(&str, PathBuf)> = Vec::new();
     for (flag, p) in [
         ("--json", &req.json),
@@ -425,12 +464,12 @@ fn check_outputs(req: &DetectRequest, files: &[PathBuf], several: bool) -> Resul
             for f in files {
                 let t = per_input_path(base, f, several);
                 if let Some(first) = seen.insert(t.clone(), f) {
-                    return Err(format!(
+                    bail!(
                         "{flag}: {} and {} would both be written to {}",
                         first.display(),
                         f.display(),
                         t.display()
-                    ));
+                    );
                 }
                 targets.push((flag, t));
             }
@@ -442,11 +481,11 @@ fn check_outputs(req: &DetectRequest, files: &[PathBuf], several: bool) -> Resul
         .collect();
     for (flag, t) in &targets {
         if let Some(f) = std::fs::canonicalize(t).ok().and_then(|c| inputs.get(&c)) {
-            return Err(format!(
+            bail!(
                 "{flag} {}: is the input {}; refusing to replace it",
                 t.display(),
                 f.display()
-            ));
+            );
         }
     }
     Ok(())
@@ -605,30 +644,16 @@ pub struct InspectRequest {
 
 /// Runs `afford inspect`: detection on one file and a picture of the height map with the
 /// hypotheses of the first model and the detections of all (the paper's Fig. 4 b-d) beside
-/// views of the posed agents. Returns the exit code (0 done, 2 error).
-pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
-    let models = match req.settings.models.load() {
-        Ok(m) => m,
-        Err(e) => {
-            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-            return 2;
-        }
-    };
-    let loaded = match load_input(&req.file, &req.settings.input) {
-        Ok(l) => l,
-        Err(e) => {
-            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-            return 2;
-        }
-    };
+/// views of the posed agents.
+pub fn run_inspect(
+    req: &InspectRequest,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
+    let models = req.settings.models.load()?;
+    let loaded = load_input(&req.file, &req.settings.input)?;
     notes(&loaded, &req.file, err);
-    let prepared = match prepare_guarded(&req.file, &loaded.cloud, &req.settings.detect) {
-        Ok(p) => p,
-        Err(e) => {
-            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-            return 2;
-        }
-    };
+    let prepared = prepare_guarded(&req.file, &loaded.cloud, &req.settings.detect)?;
     let hyps = models
         .first()
         .map(|m| {
@@ -660,24 +685,16 @@ pub fn run_inspect(req: &InspectRequest, out: &mut dyn Write, err: &mut dyn Writ
         stats,
     };
     let legend = Legend::of(models.iter().map(|m| &m.hierarchy));
-    if let Err(e) = afford::report::render::inspect_png(
-        &loaded.cloud,
-        &prepared,
-        &hyps,
-        &drawn,
-        &legend,
-        &req.png,
-    ) {
-        let _ = writeln!(err, "error: {}: cannot write: {e}", req.png.display());
-        return 2;
-    }
+    afford::report::render::inspect_png(&loaded.cloud, &prepared, &hyps, &drawn, &legend, &req.png)
+        .with_context(|| format!("{}: cannot write", req.png.display()))?;
     let text = format!(
         "{}{} hypotheses drawn in {}\n",
         report::to_table(&r),
         hyps.len(),
         req.png.display()
     );
-    print(out, err, &text).err().unwrap_or(0)
+    print(out, &text)?;
+    Ok(Outcome::Done)
 }
 
 /// Everything `afford synth` was asked to do.
@@ -703,46 +720,47 @@ pub struct SynthRequest {
     pub camera_frame: bool,
 }
 
-/// Runs `afford synth`; returns the exit code.
-pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+/// Runs `afford synth`: with `--mesh`, one mesh that cannot be read does not stop the
+/// others.
+pub fn run_synth(
+    req: &SynthRequest,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
     use afford_synth::dataset;
-    if let Err(e) = std::fs::create_dir_all(&req.out) {
-        let _ = writeln!(err, "error: {}: cannot create: {e}", req.out.display());
-        return 2;
-    }
+    std::fs::create_dir_all(&req.out)
+        .with_context(|| format!("{}: cannot create", req.out.display()))?;
     if let Some(labels) = &req.models {
-        return match dataset::views_of_labelled_models(labels, &req.out, req.seed, req.views) {
-            Ok(s) => {
-                let text = format!(
-                    "wrote {} views and {}\n",
-                    s.rows.len(),
-                    s.labels_csv.display()
-                );
-                print(out, err, &text).err().unwrap_or(0)
-            }
-            Err(e) => {
-                let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-                2
-            }
-        };
+        let s = dataset::views_of_labelled_models(labels, &req.out, req.seed, req.views)?;
+        let text = format!(
+            "wrote {} views and {}\n",
+            s.rows.len(),
+            s.labels_csv.display()
+        );
+        print(out, &text)?;
+        return Ok(Outcome::Done);
     }
     if !req.meshes.is_empty() {
-        let mut failed = 0;
+        let mut failed = false;
         for m in &req.meshes {
             match dataset::render_mesh_views(m, &req.out, req.seed, req.views) {
                 Ok(files) => {
                     let text: String = files.iter().map(|f| format!("{}\n", f.display())).collect();
-                    if let Err(code) = print(out, err, &text) {
-                        return if failed > 0 { 2 } else { code };
+                    if let Err(e) = print(out, &text) {
+                        // A closed pipe after a failed mesh still ends as failed.
+                        if failed && e.reader_gone() {
+                            return Ok(Outcome::Failed);
+                        }
+                        return Err(e.into());
                     }
                 }
                 Err(e) => {
-                    let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-                    failed += 1;
+                    report_error(err, &e.into());
+                    failed = true;
                 }
             }
         }
-        return if failed > 0 { 2 } else { 0 };
+        return Ok(Outcome::of(failed));
     }
     let mut spec = dataset::DatasetSpec {
         stride: req.stride,
@@ -766,26 +784,20 @@ pub fn run_synth(req: &SynthRequest, out: &mut dyn Write, err: &mut dyn Write) -
             spec.room = room;
         }
     }
-    match dataset::generate(&req.out, req.seed, &spec) {
-        Ok(s) => {
-            let mut text = format!(
-                "wrote {} scenes and {}\n",
-                s.rows.len(),
-                s.labels_csv.display()
-            );
-            if req.camera_frame {
-                text.push_str(&format!(
-                    "clouds are in their cameras' frames: afford eval {} --camera --floor auto\n",
-                    s.labels_csv.display()
-                ));
-            }
-            print(out, err, &text).err().unwrap_or(0)
-        }
-        Err(e) => {
-            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-            2
-        }
+    let s = dataset::generate(&req.out, req.seed, &spec)?;
+    let mut text = format!(
+        "wrote {} scenes and {}\n",
+        s.rows.len(),
+        s.labels_csv.display()
+    );
+    if req.camera_frame {
+        text.push_str(&format!(
+            "clouds are in their cameras' frames: afford eval {} --camera --floor auto\n",
+            s.labels_csv.display()
+        ));
     }
+    print(out, &text)?;
+    Ok(Outcome::Done)
 }
 
 /// Everything `afford eval` was asked to do.
@@ -807,9 +819,13 @@ pub struct EvalRequest {
     pub quiet: bool,
 }
 
-/// Runs `afford eval`: prints the markdown table; returns the exit code (2 on error or
-/// when a file could not be read).
-pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+/// Runs `afford eval`: prints the markdown table and writes the outputs;
+/// [`Outcome::Failed`] when a labelled file could not be read or an output not written.
+pub fn run_eval(
+    req: &EvalRequest,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
     let ev = if req.from.is_empty() {
         afford::eval::evaluate(
             &req.labels,
@@ -821,33 +837,31 @@ pub fn run_eval(req: &EvalRequest, out: &mut dyn Write, err: &mut dyn Write) -> 
     } else {
         afford::eval::evaluate_saved(&req.labels, &req.settings.models, &req.from)
     };
-    let ev = match ev {
-        Ok(ev) => ev,
-        Err(e) => {
-            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-            return 2;
+    let ev = ev?;
+    // The outputs are written and the unread files reported after standard output failed
+    // too; a closed pipe is no failure.
+    let mut failed = match print(out, &ev.markdown()) {
+        Err(e) if !e.reader_gone() => {
+            report_error(err, &e.into());
+            true
         }
+        _ => false,
     };
-    let mut code = print(out, err, &ev.markdown()).err().unwrap_or(0);
     for (target, text) in [(&req.json, ev.to_json()), (&req.csv, ev.to_csv())] {
         if let Some(p) = target {
             if let Err(e) = afford::report::atomic::write_bytes(p, text.as_bytes()) {
-                let _ = writeln!(err, "error: {}: cannot write: {e}", p.display());
-                code = 2;
+                report_error(
+                    err,
+                    &anyhow::Error::new(e).context(format!("{}: cannot write", p.display())),
+                );
+                failed = true;
             }
         }
     }
     for (file, why) in &ev.failed {
-        let _ = writeln!(
-            err,
-            "error: {}",
-            batch::printable(&format!("{file}: {why}"))
-        );
+        report_error(err, &anyhow::anyhow!("{file}: {why}"));
     }
-    if !ev.failed.is_empty() {
-        code = 2;
-    }
-    code
+    Ok(Outcome::of(failed || !ev.failed.is_empty()))
 }
 
 /// Everything `afford convert` was asked to do.
@@ -865,22 +879,18 @@ pub struct ConvertRequest {
 
 /// Runs `afford convert`: reads any input the detector reads (with the same frame options)
 /// and writes it as PLY (binary or ascii) or binary PCD, in metres, z up, floor at z = 0.
-pub fn run_convert(req: &ConvertRequest, out: &mut dyn Write, err: &mut dyn Write) -> i32 {
+pub fn run_convert(
+    req: &ConvertRequest,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
     if afford::report::atomic::same_file(&req.input, &req.output) {
-        let _ = writeln!(
-            err,
-            "error: {}: is the input; refusing to replace it",
+        bail!(
+            "{}: is the input; refusing to replace it",
             req.output.display()
         );
-        return 2;
     }
-    let input = match load_input(&req.input, &req.options) {
-        Ok(i) => i,
-        Err(e) => {
-            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-            return 2;
-        }
-    };
+    let input = load_input(&req.input, &req.options)?;
     notes(&input, &req.input, err);
     let ext = req
         .output
@@ -897,38 +907,22 @@ pub fn run_convert(req: &ConvertRequest, out: &mut dyn Write, err: &mut dyn Writ
         .enumerate()
         .find_map(|(i, p)| p.coords.iter().find(|c| c.abs() > limit).map(|&c| (i, c)))
     {
-        let _ = writeln!(
-            err,
-            "error: {}: point {i}: coordinate {c:.3e} does not fit the 32-bit floats of {}",
+        bail!(
+            "{}: point {i}: coordinate {c:.3e} does not fit the 32-bit floats of {}",
             req.input.display(),
             req.output.display()
         );
-        return 2;
     }
-    let written = match ext.as_deref() {
-        Some("ply") => cloud::write_ply_points(&req.output, &input.cloud.points, &[], !req.ascii),
-        Some("pcd") if !req.ascii => cloud::write_pcd(&req.output, &input.cloud.points),
-        Some("pcd") => {
-            let _ = writeln!(
-                err,
-                "error: {}: ascii output is written as PLY only",
-                req.output.display()
-            );
-            return 2;
-        }
-        _ => {
-            let _ = writeln!(err, "error: {}: write .ply or .pcd", req.output.display());
-            return 2;
-        }
-    };
-    match written {
-        Ok(()) => {
-            let text = format!("{}: {} points\n", req.output.display(), input.cloud.len());
-            print(out, err, &text).err().unwrap_or(0)
-        }
-        Err(e) => {
-            let _ = writeln!(err, "error: {}", batch::printable(&e.to_string()));
-            2
-        }
+    match ext.as_deref() {
+        Some("ply") => cloud::write_ply_points(&req.output, &input.cloud.points, &[], !req.ascii)?,
+        Some("pcd") if !req.ascii => cloud::write_pcd(&req.output, &input.cloud.points)?,
+        Some("pcd") => bail!(
+            "{}: ascii output is written as PLY only",
+            req.output.display()
+        ),
+        _ => bail!("{}: write .ply or .pcd", req.output.display()),
     }
+    let text = format!("{}: {} points\n", req.output.display(), input.cloud.len());
+    print(out, &text)?;
+    Ok(Outcome::Done)
 }

@@ -285,12 +285,12 @@ fn each_table_is_written_as_its_file_ends() {
         progress: false,
     };
     let seq = Arc::new(Mutex::new(Vec::new()));
-    let code = afford_cli::run::run_detect(
+    let outcome = afford_cli::run::run_detect(
         &req,
         &mut Tagged("out: ", seq.clone()),
         &mut Tagged("err: ", seq.clone()),
     );
-    assert_eq!(code, 2);
+    assert_eq!(outcome.unwrap(), afford_cli::run::Outcome::Failed);
     let seq = seq.lock().unwrap().join("");
     let at = |what: &str| seq.find(what).unwrap_or_else(|| panic!("{what}: {seq}"));
     assert!(at("c00.xyz: 3 points") < at("missing.pcd"), "{seq}");

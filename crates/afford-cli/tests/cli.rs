@@ -306,3 +306,71 @@ fn convert_round_trips_through_pcd_and_ascii_ply() {
     assert_eq!(bad.status.code(), Some(2));
     assert!(text(&bad.stderr).contains("room.las"));
 }
+
+/// Errors that end a command are printed at the edge (`afford_cli::cli::main`): standard
+/// error is exactly one line, byte for byte, and the exit code 2. Control characters in a
+/// name are escaped there too, so the error stays one line.
+#[test]
+fn an_error_that_ends_a_command_is_one_exact_line() {
+    use crate::common::{s, small_scene, write_xyz};
+    let d = tmp();
+    let x = s(&write_xyz(&d.path().join("x.xyz"), &small_scene(0.1)));
+    let file = p(d.path(), "x.xyz");
+    std::fs::create_dir_all(d.path().join("a")).unwrap();
+    std::fs::create_dir_all(d.path().join("b")).unwrap();
+    let a = s(&write_xyz(&d.path().join("a/chair.xyz"), &small_scene(0.1)));
+    let b = s(&write_xyz(&d.path().join("b/chair.xyz"), &small_scene(0.1)));
+    let seg = p(d.path(), "seg.ply");
+    let pcd = p(d.path(), "out.pcd");
+    let newline = p(d.path(), "two\nlines.xyz");
+    let escaped = p(d.path(), "two\\nlines.xyz");
+    let not_dir = "Not a directory (os error 20)";
+    let (under_file, png_under_file) = (format!("{file}/sub"), format!("{file}/x.png"));
+    let cases: Vec<(Vec<&str>, String)> = vec![
+        (
+            vec!["detect", &x, "--mesh-scene", "--mesh", &seg],
+            "--mesh-scene puts the cloud into a glTF mesh: give --mesh NAME.glb".into(),
+        ),
+        (
+            vec!["detect", &x, "--out-dir", &under_file],
+            format!("{file}/sub: cannot create: {not_dir}"),
+        ),
+        (
+            vec!["detect", &a, &b, "--segments", &seg],
+            format!(
+                "--segments: {a} and {b} would both be written to {}",
+                p(d.path(), "seg.chair.ply")
+            ),
+        ),
+        (
+            vec!["detect", &x, "--transform", "no_such_matrix"],
+            "--transform no_such_matrix: no such file, and not a matrix of 16 numbers".into(),
+        ),
+        (
+            vec!["inspect", &x, "--png", &png_under_file],
+            format!("{file}/x.png: cannot write: {not_dir}"),
+        ),
+        (
+            vec!["synth", "--out", &under_file, "--count", "0", "0", "0", "0"],
+            format!("{file}/sub: cannot create: {not_dir}"),
+        ),
+        (
+            vec!["convert", &x, &x],
+            format!("{x}: is the input; refusing to replace it"),
+        ),
+        (
+            vec!["convert", &x, &pcd, "--ascii"],
+            format!("{pcd}: ascii output is written as PLY only"),
+        ),
+        (
+            vec!["convert", &x, &newline],
+            format!("{escaped}: write .ply or .pcd"),
+        ),
+    ];
+    for (args, line) in cases {
+        let o = afford(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert_eq!(text(&o.stderr), format!("error: {line}\n"), "{args:?}");
+        assert!(o.stdout.is_empty(), "{args:?}");
+    }
+}

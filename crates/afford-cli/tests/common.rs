@@ -40,6 +40,8 @@ pub(crate) const SAMPLE: &str = "data/sample/room.ply";
 
 /// A seat-sized scene in metres: a 2 m x 2 m floor and a 0.5 m x 0.5 m box top at 0.45 m,
 /// sampled every `step` metres, as `x y z` rows.
+// `step` is a positive literal of a test: the counts are a few hundred at most.
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
 pub(crate) fn small_scene(step: f64) -> Vec<[f64; 3]> {
     let mut pts = Vec::new();
     let n = (2.0 / step) as usize;

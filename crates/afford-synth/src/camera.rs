@@ -238,11 +238,18 @@ pub struct Hit {
 
 const LEAF_SIZE: usize = 4;
 
+/// A triangle or node index as the hierarchy stores it (`u32`, half the memory),
+/// saturating: a mesh has fewer than `u32::MAX` triangles (its vertex indices are `u32`
+/// and a mesh file is at most 1 GiB), and the hierarchy has fewer than twice as many nodes.
+fn tri32(i: usize) -> u32 {
+    u32::try_from(i).unwrap_or(u32::MAX)
+}
+
 impl<'a> Bvh<'a> {
     /// Builds the hierarchy (median split along the longest axis of the centroids).
     pub fn new(mesh: &'a Mesh) -> Self {
         let n = mesh.triangles.len();
-        let mut tris: Vec<u32> = (0..n as u32).collect();
+        let mut tris: Vec<u32> = (0..tri32(n)).collect();
         let boxes: Vec<Aabb> = (0..n)
             .map(|i| {
                 let mut b = Aabb::empty();
@@ -270,8 +277,8 @@ impl<'a> Bvh<'a> {
             nodes[ni].bounds = b;
             let ext = c.hi - c.lo;
             if e - s <= LEAF_SIZE || ext.max() <= 0.0 {
-                nodes[ni].start = s as u32;
-                nodes[ni].count = (e - s) as u32;
+                nodes[ni].start = tri32(s);
+                nodes[ni].count = tri32(e - s);
                 continue;
             }
             let axis = ext.imax();
@@ -287,7 +294,7 @@ impl<'a> Bvh<'a> {
             };
             nodes.push(empty);
             nodes.push(empty);
-            nodes[ni].start = left as u32;
+            nodes[ni].start = tri32(left);
             nodes[ni].count = 0;
             work.push((left, s, mid));
             work.push((left + 1, mid, e));

@@ -887,7 +887,7 @@ pub fn make_object(class: Class, rng: &mut ChaCha8Rng) -> Object {
             let h = u(rng, 0.4, 0.8);
             let d = u(rng, 0.06, 0.12);
             let z0 = u(rng, 0.08, 0.18);
-            let fins = (w / 0.06).round() as usize;
+            let fins = crate::count((w / 0.06).round());
             for k in 0..fins {
                 let y = -w / 2.0 + w * (k as f64 + 0.5) / fins as f64;
                 m.add_box(

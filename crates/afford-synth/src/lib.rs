@@ -13,4 +13,11 @@ pub mod furniture;
 pub mod scenes;
 pub mod wide;
 
-pub use furniture::*;
+/// A count of parts or cells from a length the caller has rounded (`round`, `floor`,
+/// `ceil`): furniture sizes are drawn from ranges of a metre or two, so the count is small
+/// and the saturating `as` (NaN and negatives give 0) drops only the fraction.
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+pub(crate) fn count(x: f64) -> usize {
+    // Saturating by the definition of `as` (see the function's doc).
+    x as usize
+}

@@ -13,7 +13,7 @@
 use nalgebra::Point3;
 
 use super::camera::{render_view, Camera};
-use super::*;
+use crate::furniture::*;
 use afford::cloud::PointCloud;
 use afford::mesh::Mesh;
 
@@ -36,7 +36,7 @@ pub fn big_floor() -> PointCloud {
         true,
     )
     .points;
-    let n = BIG_FLOOR_EDGE as usize;
+    let n = crate::count(BIG_FLOOR_EDGE);
     for i in 0..=n {
         for j in 0..=n {
             pts.push(Point3::new(i as f64, j as f64, 0.0));

@@ -593,8 +593,8 @@ fn dress_bed(m: &mut Mesh, rng: &mut ChaCha8Rng, hx: f64, hy: f64, top: f64, x_h
         (top + dt + w + f).max(top + 0.01)
     };
     let (x0, x1, y0, y1) = (x_head, hx + 0.03, -hy - 0.03, hy + 0.03);
-    let nx = ((x1 - x0) / 0.04).ceil() as usize;
-    let ny = ((y1 - y0) / 0.04).ceil() as usize;
+    let nx = crate::count(((x1 - x0) / 0.04).ceil());
+    let ny = crate::count(((y1 - y0) / 0.04).ceil());
     m.add_height_field(x0, x1, y0, y1, nx, ny, wrinkle, Part::LyingSurface);
     let drop = u(rng, 0.10, 0.25);
     for (a, b) in [
@@ -782,7 +782,7 @@ pub(super) fn table_with_chairs_object(rng: &mut ChaCha8Rng) -> Built {
     };
     let mut m = table(&tp);
     let usable = tp.length - 2.0 * (tp.leg_inset + tp.leg_size + 0.02);
-    let per_side = ((usable / 0.58).floor() as usize).clamp(1, 3);
+    let per_side = crate::count((usable / 0.58).floor()).clamp(1, 3);
     let mut labels = Labels::default();
     let mut seat_h: f64 = 0.45;
     let mut placed = 0;
@@ -1300,7 +1300,7 @@ mod tests {
                     (max(&col) - rail).abs() < 1e-9,
                     "{seed}: the rail tops the post"
                 );
-                let bins = (rail / 0.05).floor() as usize;
+                let bins = crate::count((rail / 0.05).floor());
                 for b in 0..bins {
                     let (z0, z1) = (b as f64 * 0.05, (b + 1) as f64 * 0.05);
                     assert!(
@@ -1374,7 +1374,8 @@ mod tests {
             .enumerate()
         {
             for seed in 0..15 {
-                let class = WIDE_CLASSES[(seed as usize * 7 + k) % WIDE_CLASSES.len()];
+                let class =
+                    WIDE_CLASSES[(usize::try_from(seed).unwrap() * 7 + k) % WIDE_CLASSES.len()];
                 let s = one_scene_wide(kind, class, seed, &spec);
                 let p = pitch_deg(&s.camera.unwrap());
                 assert!(

@@ -6,7 +6,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use afford::cloud::pointcloud2::encode_cdr;
-use afford::cloud::{read_parts, Pick, SourceOptions};
+use afford::cloud::source::{read_parts, Pick, SourceOptions};
 use mcap::{Channel, Message, Schema, WriteOptions};
 use nalgebra::Point3;
 
@@ -59,7 +59,7 @@ fn write_bag(
         let t = T0 + i as u64 * 100_000_000;
         w.write(&Message {
             channel: channel.clone(),
-            sequence: i as u32,
+            sequence: u32::try_from(i).unwrap(),
             log_time: t,
             publish_time: t,
             data: Cow::Owned(encode_cdr(c, l.0, l.1, l.2, l.3, l.4)),
@@ -67,7 +67,7 @@ fn write_bag(
         .unwrap();
         w.write(&Message {
             channel: chatter.clone(),
-            sequence: i as u32,
+            sequence: u32::try_from(i).unwrap(),
             log_time: t + 1,
             publish_time: t + 1,
             data: Cow::Borrowed(&[0, 1, 0, 0, 3, 0, 0, 0, b'h', b'i', 0]),
@@ -317,7 +317,7 @@ fn chunk(size: u64, compression: &str, records: &[u8]) -> Vec<u8> {
     let mut c = vec![0u8; 16];
     c.extend(size.to_le_bytes());
     c.extend(0u32.to_le_bytes());
-    c.extend((compression.len() as u32).to_le_bytes());
+    c.extend(u32::try_from(compression.len()).unwrap().to_le_bytes());
     c.extend(compression.as_bytes());
     c.extend((records.len() as u64).to_le_bytes());
     c.extend(records);

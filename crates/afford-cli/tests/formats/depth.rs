@@ -2,7 +2,7 @@
 
 use afford::cloud::depth::write_depth_png;
 use afford_synth::camera::{Bvh, Camera};
-use afford_synth::{floor, scene_mesh};
+use afford_synth::furniture::{floor, scene_mesh};
 use nalgebra::{Point3, Vector3};
 
 use super::*;
@@ -30,7 +30,10 @@ fn a_depth_png_gives_the_detections_of_its_points_as_ply() {
             if let Some(hit) = bvh.cast(&cam.position, &world.normalize()) {
                 let z = hit.t / c.norm();
                 if z < 6.0 {
-                    depth[(v * W + u) as usize] = (z * 1000.0).round() as u16;
+                    // Under 6 m: at most 6000 mm, a u16.
+                    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+                    let mm = (z * 1000.0).round() as u16;
+                    depth[(v * W + u) as usize] = mm;
                 }
             }
         }
@@ -71,13 +74,13 @@ fn a_depth_png_gives_the_detections_of_its_points_as_ply() {
     assert_eq!(detections(&got, 0), detections(&want, 0));
     // Read at twice the scale, the scene is twice as far and twice as large.
     let mut far = Vec::new();
-    let k: afford::cloud::Intrinsics = k.parse().unwrap();
-    let opts = afford::cloud::SourceOptions {
+    let k: afford::cloud::source::Intrinsics = k.parse().unwrap();
+    let opts = afford::cloud::source::SourceOptions {
         intrinsics: Some(k),
         depth_scale: 0.002,
         ..Default::default()
     };
-    afford::cloud::read_parts(&png, &opts, &mut |p| far = p.cloud.cloud.points).unwrap();
+    afford::cloud::source::read_parts(&png, &opts, &mut |p| far = p.cloud.cloud.points).unwrap();
     assert_eq!(far.len(), pts.len());
     for (a, b) in far.iter().zip(&pts) {
         assert!((a.coords - b.coords * 2.0).norm() < 1e-12);
@@ -92,14 +95,14 @@ fn a_depth_png_without_intrinsics_or_damaged_is_one_line() {
     let e = afford::cloud::load(&png).unwrap_err().to_string();
     assert!(e.contains("d.png") && e.contains("--intrinsics"), "{e}");
     let bytes = std::fs::read(&png).unwrap();
-    let opts = afford::cloud::SourceOptions {
+    let opts = afford::cloud::source::SourceOptions {
         intrinsics: Some("1,1,0,0".parse().unwrap()),
         ..Default::default()
     };
     for n in 0..bytes.len() - 12 {
         let cut = d.path().join("cut.png");
         std::fs::write(&cut, &bytes[..n]).unwrap();
-        let e = afford::cloud::read_parts(&cut, &opts, &mut |_| {})
+        let e = afford::cloud::source::read_parts(&cut, &opts, &mut |_| {})
             .unwrap_err()
             .to_string();
         assert!(

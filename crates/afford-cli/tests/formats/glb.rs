@@ -13,7 +13,10 @@ fn to_srgb(l: f32) -> u8 {
     } else {
         1.055 * l.powf(1.0 / 2.4) - 0.055
     };
-    (s * 255.0).round() as u8
+    // `s` is in 0..=1: the channel is in 0..=255.
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+    let c = (s * 255.0).round() as u8;
+    c
 }
 
 /// The colour the built-in hierarchies' legends give a detection with `affordances`.
@@ -80,6 +83,8 @@ fn the_glb_opens_with_a_named_node_per_detection_in_its_colour() {
         let verts: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
         let pos = det["position"].as_array().unwrap();
         for k in 0..3 {
+            // A position the file wrote from f32 values: exact in f32.
+            #[allow(clippy::cast_possible_truncation)]
             let p = pos[k].as_f64().unwrap() as f32;
             let lo = verts.iter().map(|v| v[k]).fold(f32::INFINITY, f32::min);
             let hi = verts.iter().map(|v| v[k]).fold(f32::NEG_INFINITY, f32::max);

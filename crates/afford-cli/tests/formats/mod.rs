@@ -9,7 +9,7 @@ mod scans;
 
 use std::path::{Path, PathBuf};
 
-use afford_synth::{chair, scene_cloud, ChairParams};
+use afford_synth::furniture::{chair, scene_cloud, ChairParams};
 use nalgebra::Point3;
 use serde_json::Value;
 

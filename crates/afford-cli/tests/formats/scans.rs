@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use afford::cloud::{read_parts, SourceOptions};
+use afford::cloud::source::{read_parts, SourceOptions};
 use e57::{E57Writer, Quaternion, Record, RecordValue, Transform, Translation};
 use nalgebra::Point3;
 

@@ -8,6 +8,7 @@
 use crate::common::*;
 
 /// Points of the plane `z` over `[x0, x1] x [y0, y1]`, every `step` metres.
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)] // small positive counts of the test's own planes
 fn plane(pts: &mut Vec<[f64; 3]>, x: [f64; 2], y: [f64; 2], z: f64, step: f64) {
     let (nx, ny) = (
         ((x[1] - x[0]) / step).round() as usize,

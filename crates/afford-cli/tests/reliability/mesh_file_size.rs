@@ -14,6 +14,6 @@ fn an_oversized_mesh_is_refused_before_reading() {
         .unwrap();
     f.write_all(b"\n").unwrap();
     drop(f);
-    let e = afford::cloud::read_mesh(&p).unwrap_err().to_string();
+    let e = afford::cloud::mesh::read_mesh(&p).unwrap_err().to_string();
     assert!(e.contains("big.obj") && e.contains("more than"), "{e}");
 }

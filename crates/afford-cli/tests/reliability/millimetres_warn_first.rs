@@ -31,5 +31,5 @@ fn a_stray_point_does_not_make_a_room_look_like_millimetres() {
         .collect();
     pts.push(nalgebra::Point3::new(150.0, 0.0, 0.0));
     let c = afford::cloud::PointCloud::new(pts);
-    assert_eq!(afford::cloud::check_units(&c), None);
+    assert_eq!(afford::cloud::frame::check_units(&c), None);
 }

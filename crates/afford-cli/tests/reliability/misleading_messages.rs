@@ -41,7 +41,9 @@ fn a_fifo_is_not_a_file() {
     assert!(e.contains("not a regular file (a FIFO)"), "{e}");
     let zero = d.path().join("zero.obj");
     std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
-    let e = afford::cloud::read_mesh(&zero).unwrap_err().to_string();
+    let e = afford::cloud::mesh::read_mesh(&zero)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("a device"), "{e}");
 }
 

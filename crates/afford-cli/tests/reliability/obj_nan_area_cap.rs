@@ -3,7 +3,7 @@
 //! it was sampled at 5e9 points. Triangles of non-finite area are now left out of the
 //! sampling, so the cap holds.
 
-use afford::cloud::{expected_samples, sample_mesh, MAX_SAMPLES};
+use afford::cloud::mesh::{expected_samples, sample_mesh, MAX_SAMPLES};
 use afford::mesh::{Mesh, Part};
 use nalgebra::Point3;
 

@@ -9,6 +9,6 @@ fn a_face_with_2_pow_64_corners_is_a_body_error() {
     let d = tempfile::tempdir().unwrap();
     let f = d.path().join("corners.off");
     std::fs::write(&f, huge_corner_off()).unwrap();
-    let e = afford::cloud::read_mesh(&f).unwrap_err().to_string();
+    let e = afford::cloud::mesh::read_mesh(&f).unwrap_err().to_string();
     assert!(e.contains("corners.off: bad data at line 6"), "{e}");
 }

@@ -1,0 +1,71 @@
+//! Float-to-integer and f64-to-f32 conversions, in one place with their reasons.
+//!
+//! Rust's `as` from a float to an integer drops the fraction and saturates: NaN gives 0,
+//! a value below or above the type's range gives its bound. The helpers below are that
+//! conversion, named for what their callers rely on, so each call site says which it is
+//! and no `as` that may drop bits goes unexplained (`clippy::cast_possible_truncation`).
+
+/// A count or an index from a float the caller has already rounded (`ceil`, `round`,
+/// `floor`) and knows to be at least 0: a count of samples or steps along a length, or
+/// a grid offset from the grid's low corner. Saturates: NaN and negatives give 0, beyond
+/// `usize::MAX` gives `usize::MAX` (callers cap counts by model values checked at load,
+/// and grids by the extent guard, `crate::method::extent`).
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+#[inline]
+pub(crate) fn to_usize(x: f64) -> usize {
+    // Saturating by the definition of `as` (see the function's doc).
+    x as usize
+}
+
+/// [`to_usize`] for a count a file declares as a number (a PLY list length), already
+/// checked to be a whole number of at most 32 bits.
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+#[inline]
+pub(crate) fn to_u64(x: f64) -> u64 {
+    // Saturating by the definition of `as` (see the function's doc).
+    x as u64
+}
+
+/// A count declared by a file (`u64`) as the size of a preallocation, capped at `cap`:
+/// the memory follows what is read, not what a header says.
+#[inline]
+pub(crate) fn capacity(count: u64, cap: usize) -> usize {
+    usize::try_from(count).map_or(cap, |n| n.min(cap))
+}
+
+/// A vertex index as a triangle holds it (`u32`), saturating. Every index is below its
+/// mesh's vertex count, which the mesh readers keep under `u32::MAX` (a mesh file is at
+/// most 1 GiB; `cloud::mesh` checks the count), and the meshes built in code (furniture,
+/// posed agents) have thousands, so the saturation never happens.
+#[inline]
+pub(crate) fn index32<T: TryInto<u32>>(i: T) -> u32 {
+    i.try_into().unwrap_or(u32::MAX)
+}
+
+/// A signed grid index or cell offset from a float the caller has rounded. Saturates as
+/// [`to_usize`]: after the extent guard (|coordinate| at most 1e7 m, cells of at least
+/// 2 mm) an index is below 2^33, far inside `i64`.
+#[allow(clippy::cast_possible_truncation)]
+#[inline]
+pub(crate) fn to_i64(x: f64) -> i64 {
+    // Saturating by the definition of `as` (see the function's doc).
+    x as i64
+}
+
+/// [`to_i64`] for offsets that index slices (`isize`), e.g. a few cells around a point.
+#[allow(clippy::cast_possible_truncation)]
+#[inline]
+pub(crate) fn to_isize(x: f64) -> isize {
+    // Saturating by the definition of `as` (see the function's doc).
+    x as isize
+}
+
+/// The nearest `f32`, for parry3d's geometry and the 32-bit fields of the file formats:
+/// metres in a scene kept within 1e7 m by the extent guard lose only precision below
+/// their f32 resolution, never range (beyond ±`f32::MAX` gives ±infinity).
+#[allow(clippy::cast_possible_truncation)]
+#[inline]
+pub(crate) fn to_f32(x: f64) -> f32 {
+    // Rounds to nearest by the definition of `as` (see the function's doc).
+    x as f32
+}
