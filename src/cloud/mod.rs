@@ -25,7 +25,7 @@ mod xyz;
 pub use pcd::{read_pcd, write_pcd};
 pub(crate) use ply::{parse_header, write_ply_typed, Encoding, Kind, Scalar};
 pub use ply::{read_ply, read_ply_property, write_ply_points};
-pub use spacing::point_spacing;
+pub use spacing::{point_spacing, TileSpacing};
 pub use xyz::read_xyz;
 
 /// A point cloud in metres, z up (the environment P, section 3.1).

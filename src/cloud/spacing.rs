@@ -23,6 +23,9 @@ const MAX_SCANNED: usize = 5000;
 /// Most points (evenly chosen) whose coordinates are sorted for the robust extent: enough
 /// for the 1 % and 99 % quantiles to be within a few per cent of the cloud's.
 const EXTENT_SAMPLE: usize = 10_000;
+/// A [`TileSpacing`] tile with fewer points than this also searches the tiles round it:
+/// 64 samples of a surface crossing a tile leave few queries near its border.
+const FEW_IN_TILE: usize = 64;
 /// Share of the sample left out at each end of every axis: stray points do not size the grid.
 const EXTENT_TRIM: f64 = 0.01;
 
@@ -158,6 +161,97 @@ pub(crate) fn neighbour_distance(
     Some(dists[(dists.len() - 1) / 2])
 }
 
+/// The point spacing of each cube tile of space (`tile` metres, from a corner): the
+/// median distance to the [`K`]-th nearest neighbour over up to
+/// `queries` points of the tile, chosen evenly by index. Surfaces of one cloud are sampled
+/// at different densities (a depth camera's density falls with the square of the range; a
+/// decimated mesh keeps few vertices on flat parts), so a stage that must tell a hole
+/// from a gap between samples asks the spacing where it looks. Tiles are cubes, not
+/// columns, so that a seat and the floor seen under it are measured apart. A tile with
+/// fewer than K + 1 points has none.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TileSpacing {
+    lo: Point3<f64>,
+    tile: f64,
+    /// The spacing of each tile that has one, by tile key; tiles without points are not
+    /// stored, so memory follows the points, not the cloud's box.
+    values: HashMap<[i64; 3], f64>,
+}
+
+impl TileSpacing {
+    /// Measures the spacing of every tile of `cloud` (world frame, metres) in cubes of
+    /// `tile` metres from the corner `lo`.
+    pub fn new(cloud: &PointCloud, lo: Point3<f64>, tile: f64, queries: usize) -> TileSpacing {
+        let mut out = TileSpacing {
+            lo,
+            tile,
+            values: HashMap::new(),
+        };
+        let mut members: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+        for (i, p) in cloud.points.iter().enumerate() {
+            if let Some(k) = out.key(p) {
+                members.entry(k).or_default().push(i);
+            }
+        }
+        // The K-th nearest neighbour of each query among its tile's points; a tile of few
+        // points (a sparse patch, whose edge queries would find their neighbours farther
+        // inside the tile than across its border) looks in the 26 tiles round it too.
+        let mut d: Vec<f64> = Vec::new();
+        let mut near: Vec<usize> = Vec::new();
+        for (k, m) in &members {
+            if m.len() <= K {
+                continue;
+            }
+            near.clear();
+            if m.len() < FEW_IN_TILE {
+                for o in neighbourhood() {
+                    if let Some(n) = members.get(&[k[0] + o[0], k[1] + o[1], k[2] + o[2]]) {
+                        near.extend(n);
+                    }
+                }
+            } else {
+                near.extend(m);
+            }
+            let step = m.len().div_ceil(queries.max(1));
+            let mut kth: Vec<f64> = m
+                .iter()
+                .step_by(step)
+                .map(|&q| {
+                    let qp = cloud.points[q];
+                    d.clear();
+                    d.extend(
+                        near.iter()
+                            .filter(|&&j| j != q)
+                            .map(|&j| (cloud.points[j] - qp).norm()),
+                    );
+                    *d.select_nth_unstable_by(K - 1, f64::total_cmp).1
+                })
+                .collect();
+            kth.sort_by(f64::total_cmp);
+            out.values.insert(*k, kth[(kth.len() - 1) / 2]);
+        }
+        out
+    }
+
+    /// The key of the tile holding `p`; `None` for a point that is not finite.
+    fn key(&self, p: &Point3<f64>) -> Option<[i64; 3]> {
+        let f = (p - self.lo) / self.tile;
+        f.iter()
+            .all(|v| v.is_finite())
+            .then(|| [to_i64(f.x.floor()), to_i64(f.y.floor()), to_i64(f.z.floor())])
+    }
+
+    /// The largest spacing of any tile, if any had enough points.
+    pub fn widest(&self) -> Option<f64> {
+        self.values.values().copied().reduce(f64::max)
+    }
+
+    /// The spacing of the tile holding `p`, if it had enough points.
+    pub fn at(&self, p: &Point3<f64>) -> Option<f64> {
+        self.values.get(&self.key(p)?).copied()
+    }
+}
+
 fn neighbourhood() -> impl Iterator<Item = [i64; 3]> {
     (-1..=1).flat_map(|x| (-1..=1).flat_map(move |y| (-1..=1).map(move |z| [x, y, z])))
 }
@@ -210,6 +304,28 @@ mod tests {
         // extent, 0.5, doubled over sqrt(2) points) apart.
         let s = point_spacing(&nan).unwrap();
         assert!((s - 2.0 * 0.5 / 2f64.sqrt()).abs() < 1e-9, "{s}");
+    }
+
+    #[test]
+    fn tiles_measure_each_surface_at_its_own_density() {
+        // A floor sampled every 1 cm and a seat 0.45 m above it every 7 cm, over the same
+        // x-y square: each 0.25 m tile says its own surface's step.
+        let mut pts = grid(0.01, 100).points;
+        for p in &mut pts {
+            p.z = 0.0;
+        }
+        pts.extend(grid(0.07, 14).points);
+        let c = PointCloud::new(pts);
+        let t = TileSpacing::new(&c, Point3::new(0.0, 0.0, 0.0), 0.25, 16);
+        let floor = t.at(&Point3::new(0.5, 0.5, 0.0)).unwrap();
+        let seat = t.at(&Point3::new(0.5, 0.5, 0.45)).unwrap();
+        assert!((floor - 0.01).abs() < 1e-9, "{floor}");
+        assert!((seat - 0.07).abs() < 1e-9, "{seat}");
+        // At the seat's corners the fourth neighbour is a diagonal one.
+        let widest = t.widest().unwrap();
+        assert!(widest >= seat && widest <= seat * 2f64.sqrt() + 1e-9, "{widest}");
+        // The cloud's median is the floor's.
+        assert!((point_spacing(&c).unwrap() - 0.01).abs() < 1e-9);
     }
 
     #[test]

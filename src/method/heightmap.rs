@@ -7,8 +7,9 @@
 //! clouds) have no empty cells. Cells where nothing is
 //! seen stay invalid.
 
-use crate::cloud::{point_spacing, PointCloud};
+use crate::cloud::{point_spacing, PointCloud, TileSpacing};
 use crate::num::{to_isize, to_usize};
+use nalgebra::Point3;
 
 /// How the height map is built. Defaults carry their reasons.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,6 +33,10 @@ pub struct HeightMapConfig {
     pub sample_reach: f64,
     /// The most a point may stand for, metres, however sparse the cloud.
     pub max_reach: f64,
+    /// Side of the cube tiles whose own point spacing a point's reach follows, metres.
+    pub spacing_tile: f64,
+    /// Points per tile whose neighbours measure its spacing, at most.
+    pub spacing_queries: usize,
 }
 
 impl Default for HeightMapConfig {
@@ -60,6 +65,16 @@ impl Default for HeightMapConfig {
             // 0.10 m: 20k-50k-point room views sample their surfaces every 5-10 cm; points
             // farther apart than that do not describe a surface a body could rest on.
             max_reach: 0.10,
+            // 0.25 m: each surface a body rests on is sampled at its own density (a depth
+            // camera's falls with the square of the range, so a bed at 3.5 m has an eighth
+            // of the floor's at 1.2 m; a decimated mesh keeps few vertices on flat parts),
+            // so a point reaches by its tile's spacing, never less than the cloud's median (a
+            // denser patch keeps the reach it had). Tiles are cubes smaller than the height
+            // of a seat (0.4 m) so that a seat and the floor seen under it are apart, and
+            // large enough to hold 25 samples of a surface sampled every 5 cm.
+            spacing_tile: 0.25,
+            // 16 points: the median of 16 neighbour distances is within ~15 % of a tile's.
+            spacing_queries: 16,
         }
     }
 }
@@ -101,10 +116,23 @@ impl HeightMap {
         };
         let nx = to_usize(((hi.x - lo.x) / cell).floor()) + 1;
         let ny = to_usize(((hi.y - lo.y) / cell).floor()) + 1;
-        let reach = point_spacing(cloud).map_or(0.0, |s| (cfg.sample_reach * s).min(cfg.max_reach));
+        let global = point_spacing(cloud);
+        let tiles = TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries);
+        // How far the point p reaches: its tile's spacing, at least the cloud's.
+        let reach_at = |p: &Point3<f64>| -> f64 {
+            global.map_or(0.0, |g| {
+                let s = tiles.at(p).map_or(g, |t| t.max(g));
+                (cfg.sample_reach * s).min(cfg.max_reach)
+            })
+        };
+        let widest = global.map_or(0.0, |g| {
+            (cfg.sample_reach * tiles.widest().map_or(g, |t| t.max(g))).min(cfg.max_reach)
+        });
         // Cell offsets a point may reach beyond its own cell (none for dense clouds).
-        let r = to_isize((reach / cell).ceil());
-        let cells_of = |x: f64, y: f64, out: &mut Vec<usize>| {
+        let r = to_isize((widest / cell).ceil());
+        let cells_of = |p: &Point3<f64>, out: &mut Vec<usize>| {
+            let reach = reach_at(p);
+            let (x, y) = (p.x, p.y);
             out.clear();
             let fx = (x - lo.x) / cell;
             let fy = (y - lo.y) / cell;
@@ -133,7 +161,7 @@ impl HeightMap {
         let mut start = vec![0usize; nx * ny + 1];
         let mut cells = Vec::new();
         for p in &cloud.points {
-            cells_of(p.x, p.y, &mut cells);
+            cells_of(p, &mut cells);
             for &c in &cells {
                 start[c + 1] += 1;
             }
@@ -144,7 +172,7 @@ impl HeightMap {
         let mut fill = start.clone();
         let mut zs = vec![0.0f64; start[nx * ny]];
         for p in &cloud.points {
-            cells_of(p.x, p.y, &mut cells);
+            cells_of(p, &mut cells);
             for &c in &cells {
                 zs[fill[c]] = p.z;
                 fill[c] += 1;
@@ -347,6 +375,37 @@ mod tests {
         };
         let raw = HeightMap::from_cloud(&PointCloud::new(pts), &none);
         assert!(ring(&raw) < 80, "{}", ring(&raw));
+    }
+
+    /// A seat sampled every 7 cm above a floor sampled every 1 cm (a depth camera sees the
+    /// near floor far more densely than furniture further away): the cloud's median
+    /// spacing is the floor's, so the seat would fall apart into holes; its own tile's
+    /// spacing closes them. Fails with one spacing for the whole cloud.
+    #[test]
+    fn a_sparse_seat_over_a_dense_floor_is_closed() {
+        let mut pts = square(-0.5, -0.5, 2.0, 0.01, 0.0);
+        pts.extend(square(0.0, 0.0, 1.05, 0.07, 0.45));
+        let cloud = PointCloud::new(pts);
+        let cfg = HeightMapConfig::default();
+        let m = HeightMap::from_cloud(&cloud, &cfg);
+        let seat: Vec<Option<f64>> = (12..28)
+            .flat_map(|iy| (12..28).map(move |ix| (ix, iy)))
+            .map(|(ix, iy)| m.get(ix, iy))
+            .collect();
+        let on_seat = seat.iter().filter(|h| h.is_some_and(|z| z > 0.4)).count();
+        assert_eq!(on_seat, seat.len(), "{seat:?}");
+        // With one spacing for the cloud (tiles as large as the cloud), the seat's cells
+        // between its samples show the floor.
+        let one = HeightMapConfig {
+            spacing_tile: 100.0,
+            ..cfg
+        };
+        let m = HeightMap::from_cloud(&cloud, &one);
+        let on_seat = (12..28)
+            .flat_map(|iy| (12..28).map(move |ix| (ix, iy)))
+            .filter(|&(ix, iy)| m.get(ix, iy).is_some_and(|z| z > 0.4))
+            .count();
+        assert!(on_seat < seat.len() / 2, "{on_seat}");
     }
 
     #[test]
