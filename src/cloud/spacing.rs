@@ -236,9 +236,13 @@ impl TileSpacing {
     /// The key of the tile holding `p`; `None` for a point that is not finite.
     fn key(&self, p: &Point3<f64>) -> Option<[i64; 3]> {
         let f = (p - self.lo) / self.tile;
-        f.iter()
-            .all(|v| v.is_finite())
-            .then(|| [to_i64(f.x.floor()), to_i64(f.y.floor()), to_i64(f.z.floor())])
+        f.iter().all(|v| v.is_finite()).then(|| {
+            [
+                to_i64(f.x.floor()),
+                to_i64(f.y.floor()),
+                to_i64(f.z.floor()),
+            ]
+        })
     }
 
     /// The largest spacing of any tile, if any had enough points.
@@ -323,7 +327,10 @@ mod tests {
         assert!((seat - 0.07).abs() < 1e-9, "{seat}");
         // At the seat's corners the fourth neighbour is a diagonal one.
         let widest = t.widest().unwrap();
-        assert!(widest >= seat && widest <= seat * 2f64.sqrt() + 1e-9, "{widest}");
+        assert!(
+            widest >= seat && widest <= seat * 2f64.sqrt() + 1e-9,
+            "{widest}"
+        );
         // The cloud's median is the floor's.
         assert!((point_spacing(&c).unwrap() - 0.01).abs() < 1e-9);
     }
