@@ -137,10 +137,7 @@ fn fit_headings(
             *out = agent.cylinders(&f, |j| !unchecked.contains(&j));
         };
         pose(0.0, &mut parts);
-        if parts
-            .iter()
-            .any(|c| scene.clearance(c) <= 0.0 && scene.intersects(c))
-        {
+        if parts.iter().any(|c| scene.touches(c)) {
             continue;
         }
         any_free = true;

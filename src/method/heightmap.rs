@@ -118,20 +118,22 @@ impl HeightMap {
         let ny = to_usize(((hi.y - lo.y) / cell).floor()) + 1;
         let global = point_spacing(cloud);
         let tiles = TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries);
-        // How far the point p reaches: its tile's spacing, at least the cloud's.
-        let reach_at = |p: &Point3<f64>| -> f64 {
-            global.map_or(0.0, |g| {
-                let s = tiles.at(p).map_or(g, |t| t.max(g));
-                (cfg.sample_reach * s).min(cfg.max_reach)
+        // How far each point reaches: its tile's spacing, at least the cloud's (looked up
+        // once, for both passes below).
+        let reaches: Vec<f64> = cloud
+            .points
+            .iter()
+            .map(|p| {
+                global.map_or(0.0, |g| {
+                    let s = tiles.at(p).map_or(g, |t| t.max(g));
+                    (cfg.sample_reach * s).min(cfg.max_reach)
+                })
             })
-        };
-        let widest = global.map_or(0.0, |g| {
-            (cfg.sample_reach * tiles.widest().map_or(g, |t| t.max(g))).min(cfg.max_reach)
-        });
+            .collect();
+        let widest = reaches.iter().copied().fold(0.0, f64::max);
         // Cell offsets a point may reach beyond its own cell (none for dense clouds).
         let r = to_isize((widest / cell).ceil());
-        let cells_of = |p: &Point3<f64>, out: &mut Vec<usize>| {
-            let reach = reach_at(p);
+        let cells_of = |p: &Point3<f64>, reach: f64, out: &mut Vec<usize>| {
             let (x, y) = (p.x, p.y);
             out.clear();
             let fx = (x - lo.x) / cell;
@@ -160,8 +162,8 @@ impl HeightMap {
         // The points' heights grouped by cell (counting sort), then sorted within a cell.
         let mut start = vec![0usize; nx * ny + 1];
         let mut cells = Vec::new();
-        for p in &cloud.points {
-            cells_of(p, &mut cells);
+        for (p, &reach) in cloud.points.iter().zip(&reaches) {
+            cells_of(p, reach, &mut cells);
             for &c in &cells {
                 start[c + 1] += 1;
             }
@@ -171,8 +173,8 @@ impl HeightMap {
         }
         let mut fill = start.clone();
         let mut zs = vec![0.0f64; start[nx * ny]];
-        for p in &cloud.points {
-            cells_of(p, &mut cells);
+        for (p, &reach) in cloud.points.iter().zip(&reaches) {
+            cells_of(p, reach, &mut cells);
             for &c in &cells {
                 zs[fill[c]] = p.z;
                 fill[c] += 1;

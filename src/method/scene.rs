@@ -278,6 +278,12 @@ impl Scene {
         })
     }
 
+    /// Whether the body part `c` touches the scene: [`Self::clearance`] first (cheap, and
+    /// positive for most parts), then the exact [`Self::intersects`].
+    pub fn touches(&self, c: &Cylinder) -> bool {
+        self.clearance(c) <= 0.0 && self.intersects(c)
+    }
+
     /// The same test made by parry3d alone (`intersection_test` of the cylinder against
     /// the whole `Voxels` shape): the reference [`Scene::intersects`] must agree with.
     pub fn intersects_parry(&self, c: &Cylinder) -> bool {

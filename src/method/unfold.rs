@@ -219,14 +219,11 @@ impl NodeContext<'_> {
             (nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::z_axis(), self.place.yaw)
                 * release)
                 .normalize();
-        parts
-            .iter()
-            .filter(|c| self.scene.clearance(c) <= 0.0 && self.scene.intersects(c))
-            .all(|c| {
-                self.scene
-                    .contact_normal(c)
-                    .is_some_and(|n| n.dot(&dir) >= self.h.score.support_cos)
-            })
+        parts.iter().filter(|c| self.scene.touches(c)).all(|c| {
+            self.scene
+                .contact_normal(c)
+                .is_some_and(|n| n.dot(&dir) >= self.h.score.support_cos)
+        })
     }
 
     /// `support`: whether the branch's support parts (if the node has any that the branch
@@ -305,12 +302,9 @@ impl NodeContext<'_> {
             let blocked = agent
                 .cylinders(&frames, |l| !swept(l) && held(l).is_some())
                 .into_iter()
-                .any(|mut c| {
-                    let [s0, s1] = held(c.joint).map_or([0.0, 1.0], |fb| fb.free);
-                    let (a, d) = (c.a, c.b - c.a);
-                    c.a = a + d * s0;
-                    c.b = a + d * s1;
-                    self.scene.clearance(&c) <= 0.0 && self.scene.intersects(&c)
+                .any(|c| {
+                    self.scene
+                        .touches(&c.span(held(c.joint).map_or([0.0, 1.0], |fb| fb.free)))
                 });
             if blocked {
                 continue;
@@ -349,10 +343,7 @@ impl NodeContext<'_> {
             *out = agent.cylinders(&frames, |j| links.contains(&j));
             for c in out.iter_mut() {
                 if let Some(k) = node.links.iter().position(|&l| l == c.joint) {
-                    let [s0, s1] = node.spans[k];
-                    let (a, d) = (c.a, c.b - c.a);
-                    c.a = a + d * s0;
-                    c.b = a + d * s1;
+                    *c = c.span(node.spans[k]);
                 }
             }
         };

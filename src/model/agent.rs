@@ -86,6 +86,19 @@ pub struct Cylinder {
     pub radius: f64,
 }
 
+impl Cylinder {
+    /// The part of the cylinder between fractions `s0` and `s1` of its axis (0 at `a`, 1
+    /// at `b`), same radius: the part of a link a node checks (`span`, `free`).
+    pub fn span(&self, [s0, s1]: [f64; 2]) -> Cylinder {
+        let d = self.b - self.a;
+        Cylinder {
+            a: self.a + d * s0,
+            b: self.a + d * s1,
+            ..*self
+        }
+    }
+}
+
 /// The whole agent scaled to one body height, joints in topological order (parents first).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Agent {

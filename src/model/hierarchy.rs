@@ -896,10 +896,7 @@ fn resolve_node(
     let mut spreads: Vec<Spread> = Vec::new();
     for (k, sp) in n.spread.iter().enumerate() {
         let sk = key.key("spread").item(k, &sp.joint);
-        let j = names.joint(&sk.key("joint"), &sp.joint)?;
-        if sp.angles.is_empty() || sp.angles.iter().any(|a| !a.is_finite()) {
-            return Err(src.invalid(&sk.key("angles"), "needs finite angles"));
-        }
+        let j = joint_with_angles(names, &sk, &sp.joint, &sp.angles)?;
         if sweeps.iter().any(|s| s.joint == j) {
             return Err(src.invalid(
                 &sk.key("joint"),
@@ -912,21 +909,15 @@ fn resolve_node(
                 format!("joint `{}` is spread twice", sp.joint),
             ));
         }
-        for &a in &sp.angles {
-            names.within_limit(&sk.key("angles"), j, &agent.joints[j].axis, a)?;
-        }
         spreads.push(Spread {
             joint: j,
-            angles: sp.angles.iter().map(|a| a.to_radians()).collect(),
+            angles: radians_within(names, &sk, j, &sp.angles)?,
         });
     }
     let mut fallbacks: Vec<Fallback> = Vec::new();
     for (k, fb) in n.fallback.iter().enumerate() {
         let fk = key.key("fallback").item(k, &fb.joint);
-        let j = names.joint(&fk.key("joint"), &fb.joint)?;
-        if fb.angles.is_empty() || fb.angles.iter().any(|a| !a.is_finite()) {
-            return Err(src.invalid(&fk.key("angles"), "needs finite angles"));
-        }
+        let j = joint_with_angles(names, &fk, &fb.joint, &fb.angles)?;
         let [f0, f1] = fb.free;
         if !(0.0..=1.0).contains(&f0) || !(0.0..=1.0).contains(&f1) || f0 > f1 {
             return Err(src.invalid(
@@ -952,12 +943,9 @@ fn resolve_node(
                 format!("joint `{}` moves none of the node's links", fb.joint),
             ));
         }
-        for &a in &fb.angles {
-            names.within_limit(&fk.key("angles"), j, &agent.joints[j].axis, a)?;
-        }
         fallbacks.push(Fallback {
             joint: j,
-            angles: fb.angles.iter().map(|a| a.to_radians()).collect(),
+            angles: radians_within(names, &fk, j, &fb.angles)?,
             free: fb.free,
         });
     }
@@ -1002,6 +990,35 @@ fn resolve_node(
         support,
         support_gap: n.support_gap,
     })
+}
+
+/// Resolves the joint of a `spread` or `fallback` entry (`key` locates the entry) and
+/// checks that it lists at least one angle, all finite.
+fn joint_with_angles(
+    names: &Names,
+    key: &Key,
+    joint: &str,
+    angles: &[f64],
+) -> Result<usize, ModelError> {
+    let j = names.joint(&key.key("joint"), joint)?;
+    if angles.is_empty() || angles.iter().any(|a| !a.is_finite()) {
+        return Err(names.src.invalid(&key.key("angles"), "needs finite angles"));
+    }
+    Ok(j)
+}
+
+/// The `angles` (degrees in the file) of joint `j` in radians, each within the joint's
+/// limit about its own axis (`key` locates the entry).
+fn radians_within(
+    names: &Names,
+    key: &Key,
+    j: usize,
+    angles: &[f64],
+) -> Result<Vec<f64>, ModelError> {
+    for &a in angles {
+        names.within_limit(&key.key("angles"), j, &names.agent.joints[j].axis, a)?;
+    }
+    Ok(angles.iter().map(|a| a.to_radians()).collect())
 }
 
 /// Resolves a list of links, each with the span of it that counts, checking each once.
