@@ -36,6 +36,7 @@ pub fn hypotheses(
 ) -> Vec<Hypothesis> {
     let template = map.disc(rule_.template_diameter * body_height / 2.0);
     let neighbourhood = map.disc(rule_.gradient_radius * body_height);
+    let surface_rule = rule_.surface.map(|a| (a, map.disc(a.radius * body_height)));
     let height = rule_.height.map(|t| t.scaled(body_height));
     // Only every `step`-th cell in x and y is tried (grid-aligned, so deterministic).
     let step = rule_
@@ -59,13 +60,25 @@ pub fn hypotheses(
             if !verdict.available {
                 continue;
             }
-            let heading =
-                descent(map, ix, iy, &neighbourhood, rule_.flat_gradient).map(
-                    |d| match orientation {
-                        Orientation::Parallel => d,
-                        Orientation::Orthogonal => d + std::f64::consts::FRAC_PI_2,
-                    },
-                );
+            let shape = surface_rule
+                .as_ref()
+                .map(|(a, disc)| (a, surface(map, ix, iy, disc, mean, a.tolerance)));
+            if let Some((a, shape)) = &shape {
+                if shape.width < a.min_width * body_height {
+                    continue;
+                }
+            }
+            // Where the gradient is flat, the direction across the surface's long axis
+            // stands in for the descent (both point across a bed or a bench).
+            let across = descent(map, ix, iy, &neighbourhood, rule_.flat_gradient).or_else(|| {
+                shape
+                    .and_then(|(a, shape)| shape.along(a.elongation))
+                    .map(|along| along + std::f64::consts::FRAC_PI_2)
+            });
+            let heading = across.map(|d| match orientation {
+                Orientation::Parallel => d,
+                Orientation::Orthogonal => d + std::f64::consts::FRAC_PI_2,
+            });
             let (x, y) = map.centre(ix, iy);
             out.push(Hypothesis {
                 cell: (ix, iy),
@@ -153,10 +166,117 @@ pub fn descent(
     Some((-gy).atan2(-gx))
 }
 
+/// The shape of the flat surface round a place: its long axis and its width across it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceShape {
+    /// Direction of the long axis, radians about z in `[0, pi)`.
+    pub axis: f64,
+    /// Spread (standard deviation) of the surface along the long axis, metres.
+    pub spread_along: f64,
+    /// Spread across it, metres.
+    pub spread_across: f64,
+    /// Width across the long axis, metres: that of a rectangle with the same spread
+    /// (`sqrt(12)` standard deviations of the cell centres), less the half cell by which
+    /// the edge cells overhang the edge on either side; 0 where the place is not on the
+    /// surface.
+    pub width: f64,
+}
+
+impl SurfaceShape {
+    /// The long axis, if the surface is at least `elongation` times longer than wide
+    /// (spreads); `None` for a square or round top, or a double bed seen over less than
+    /// its width.
+    pub fn along(&self, elongation: f64) -> Option<f64> {
+        (self.spread_along > 0.0 && self.spread_along >= elongation * self.spread_across)
+            .then_some(self.axis)
+    }
+}
+
+/// The flat surface round cell `(ix, iy)` of `map`: the cells of `neighbourhood` (cell
+/// offsets) within `tolerance` metres of `level`, reached from the cell through cells of
+/// the surface or invalid ones (a hole in the scan is not an edge), 4-connected, taken as
+/// a 2-D point set whose principal axes give its long axis and width.
+pub fn surface(
+    map: &HeightMap,
+    ix: usize,
+    iy: usize,
+    neighbourhood: &[(isize, isize)],
+    level: f64,
+    tolerance: f64,
+) -> SurfaceShape {
+    // Some(true): on the surface; Some(false): another height (an edge); None: no data.
+    let on = |dx: isize, dy: isize| {
+        map.get(ix as isize + dx, iy as isize + dy)
+            .map(|h| (h - level).abs() <= tolerance)
+    };
+    let flat = SurfaceShape {
+        axis: 0.0,
+        spread_along: 0.0,
+        spread_across: 0.0,
+        width: 0.0,
+    };
+    if on(0, 0) != Some(true) {
+        return flat;
+    }
+    // Offsets as indices of a (2r + 1)^2 square: which are in the neighbourhood, which
+    // were reached.
+    let r = neighbourhood
+        .iter()
+        .map(|&(dx, dy)| dx.abs().max(dy.abs()))
+        .max()
+        .unwrap_or(0);
+    let side = 2 * r + 1;
+    let index = |dx: isize, dy: isize| ((dy + r) * side + dx + r).unsigned_abs();
+    let mut inside = vec![false; index(r, r) + 1];
+    for &(dx, dy) in neighbourhood {
+        inside[index(dx, dy)] = true;
+    }
+    let mut seen = vec![false; inside.len()];
+    seen[index(0, 0)] = true;
+    let mut stack = vec![(0isize, 0isize)];
+    let (mut n, mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    while let Some((dx, dy)) = stack.pop() {
+        if on(dx, dy) == Some(true) {
+            let (x, y) = (dx as f64 * map.cell, dy as f64 * map.cell);
+            n += 1.0;
+            sx += x;
+            sy += y;
+            sxx += x * x;
+            syy += y * y;
+            sxy += x * y;
+        }
+        for (nx, ny) in [(dx + 1, dy), (dx - 1, dy), (dx, dy + 1), (dx, dy - 1)] {
+            if nx.abs() > r || ny.abs() > r {
+                continue;
+            }
+            let k = index(nx, ny);
+            if inside[k] && !seen[k] && on(nx, ny) != Some(false) {
+                seen[k] = true;
+                stack.push((nx, ny));
+            }
+        }
+    }
+    let (mx, my) = (sx / n, sy / n);
+    let (cxx, cyy, cxy) = (sxx / n - mx * mx, syy / n - my * my, sxy / n - mx * my);
+    // Eigenvalues of the 2 x 2 covariance: the variances along and across the long axis.
+    let half_gap = ((cxx - cyy) * (cxx - cyy) / 4.0 + cxy * cxy).sqrt();
+    let along = ((cxx + cyy) / 2.0 + half_gap).max(0.0);
+    let across = ((cxx + cyy) / 2.0 - half_gap).max(0.0);
+    SurfaceShape {
+        axis: (0.5 * (2.0 * cxy).atan2(cxx - cyy)).rem_euclid(std::f64::consts::PI),
+        spread_along: along.sqrt(),
+        spread_across: across.sqrt(),
+        // A cell at the edge holds the surface over half its width on average: one cell
+        // less than the cells' own spread.
+        width: ((12.0 * across).sqrt() - map.cell).max(0.0),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::method::fuzzy::{Availability, Low, Trapezoid};
+    use std::f64::consts::PI;
 
     fn rule_() -> HypothesisRule {
         HypothesisRule {
@@ -179,11 +299,17 @@ mod tests {
             }),
             available: Availability { rise: [0.3, 0.7] },
             spacing: None,
+            surface: None,
         }
     }
 
     fn map(f: impl Fn(usize, usize) -> Option<f64>) -> HeightMap {
-        let (nx, ny) = (20, 20);
+        map_of(20, f)
+    }
+
+    /// An `n` x `n` map of 5 cm cells with heights `f(ix, iy)`.
+    fn map_of(n: usize, f: impl Fn(usize, usize) -> Option<f64>) -> HeightMap {
+        let (nx, ny) = (n, n);
         let heights = (0..nx * ny).map(|i| f(i % nx, i / nx)).collect();
         HeightMap {
             x0: 0.0,
@@ -262,5 +388,98 @@ mod tests {
             (d + std::f64::consts::FRAC_PI_2).abs() < 1e-9,
             "heading {d}"
         );
+    }
+
+    /// A strip `width` cells wide along the direction `deg` (degrees about z) through the
+    /// centre of a 40 x 40 map at 0.45 m over a floor at 0; `hole(x, y)` cells invalid.
+    fn strip(width: f64, deg: f64, hole: impl Fn(usize, usize) -> bool) -> HeightMap {
+        let (s, c) = deg.to_radians().sin_cos();
+        map_of(40, |x, y| {
+            let (dx, dy) = (x as f64 - 20.0, y as f64 - 20.0);
+            let across = (-s * dx + c * dy).abs();
+            (!hole(x, y)).then_some(if across <= width / 2.0 { 0.45 } else { 0.0 })
+        })
+    }
+
+    #[test]
+    fn the_surface_of_a_strip_has_its_width_and_its_direction() {
+        // Half a 1.75 m body round the place (0.875 m, 17 cells).
+        let m = strip(18.0, 0.0, |_, _| false);
+        let disc = m.disc(0.875);
+        let narrow = strip(12.0, 0.0, |_, _| false);
+        // A 0.95 m (19 cells) bed: about 0.9 m measured; a 0.65 m sofa seat less than 0.7.
+        let bed = surface(&m, 20, 20, &disc, 0.45, 0.05);
+        let seat = surface(&narrow, 20, 20, &disc, 0.45, 0.05);
+        assert!((bed.width - 0.9).abs() < 0.06, "{bed:?}");
+        assert!(seat.width < 0.66 && seat.width > 0.55, "{seat:?}");
+        // Along x, elongated enough for a heading; off the surface, nothing.
+        assert!(bed
+            .along(1.3)
+            .is_some_and(|a| a.abs() < 1e-9 || (a - PI).abs() < 1e-9));
+        assert_eq!(surface(&m, 0, 0, &disc, 0.45, 0.05).width, 0.0);
+        // Turned 30 degrees, the axis turns with it.
+        let turned = surface(&strip(18.0, 30.0, |_, _| false), 20, 20, &disc, 0.45, 0.05);
+        let a = turned.along(1.3).expect("a long axis");
+        assert!((a - 30f64.to_radians()).abs() < 0.05, "{}", a.to_degrees());
+    }
+
+    #[test]
+    fn holes_do_not_end_the_surface_and_edges_do() {
+        let disc = strip(18.0, 0.0, |_, _| false).disc(0.875);
+        let whole = surface(&strip(18.0, 0.0, |_, _| false), 20, 20, &disc, 0.45, 0.05);
+        // Every third row of the bed missing (a sparse scan): the same width.
+        let holed = strip(18.0, 0.0, |x, y| {
+            y % 3 == 0 && x != 20 && (12..29).contains(&y)
+        });
+        let holed = surface(&holed, 20, 20, &disc, 0.45, 0.05);
+        assert!(
+            (holed.width - whole.width).abs() < 0.05,
+            "{holed:?} {whole:?}"
+        );
+        // A square top gives no axis.
+        let mut square = strip(40.0, 0.0, |_, _| false);
+        for (i, h) in square.heights.iter_mut().enumerate() {
+            let (x, y) = (i % 40, i / 40);
+            if !((12..29).contains(&x) && (12..29).contains(&y)) {
+                *h = Some(0.0);
+            }
+        }
+        assert_eq!(surface(&square, 20, 20, &disc, 0.45, 0.05).along(1.3), None);
+    }
+
+    #[test]
+    fn a_surface_narrower_than_the_rule_gives_no_hypothesis() {
+        let mut r = rule_();
+        r.surface = Some(crate::model::hierarchy::SurfaceRule {
+            radius: 0.5,
+            tolerance: 0.05,
+            min_width: 0.4,
+            elongation: 1.3,
+        });
+        // Body height 1.75: 0.70 m asked; a 0.95 m strip passes, a 0.65 m one does not.
+        let wide = hypotheses(
+            &strip(19.0, 0.0, |_, _| false),
+            &r,
+            Orientation::Orthogonal,
+            1.75,
+        );
+        let narrow = hypotheses(
+            &strip(13.0, 0.0, |_, _| false),
+            &r,
+            Orientation::Orthogonal,
+            1.75,
+        );
+        assert!(!wide.is_empty());
+        assert!(narrow.is_empty());
+        // The middle of the wide strip is flat: the heading is along the strip.
+        let mid = wide
+            .iter()
+            .find(|h| h.cell == (20, 20))
+            .expect("a hypothesis in the middle");
+        let yaw = mid
+            .heading
+            .expect("a heading from the long axis")
+            .rem_euclid(PI);
+        assert!(yaw.abs() < 1e-6 || (yaw - PI).abs() < 1e-6, "{yaw}");
     }
 }

@@ -49,6 +49,30 @@ pub struct HypothesisRule {
     /// 1.7 m long, so places 5 cm apart are the same place); absent: every cell.
     #[serde(default)]
     pub spacing: Option<f64>,
+    /// The surface the body rests on, measured around the place (an extension): how wide
+    /// it must be, and where the gradient is flat, the heading from its long axis; absent:
+    /// no width asked and every heading tried where it is flat.
+    #[serde(default)]
+    pub surface: Option<SurfaceRule>,
+}
+
+/// The flat surface round a place (an extension of section 4.1): the cells at the level of
+/// the template's mean height, reached from the place without crossing an edge. Lying
+/// needs a bed's width, which the template (the width of the back) cannot tell from a sofa
+/// seat; and in the middle of a bed the gradient is flat and gives no heading, but the
+/// mattress is longer than it is wide and a body lies along it.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceRule {
+    /// Radius of the neighbourhood measured, fraction of H.
+    pub radius: f64,
+    /// Cells within this height (metres) of the template's mean height are on the surface.
+    pub tolerance: f64,
+    /// Least width of the surface across its long axis, fraction of H.
+    pub min_width: f64,
+    /// Least ratio of the surface's spread along its long axis to its spread across
+    /// (standard deviations) for the axis to give a heading where the gradient is flat.
+    pub elongation: f64,
 }
 
 /// Parameters of the initial agent fitting (section 4.2).
@@ -628,6 +652,13 @@ fn check_limits(file: &File, src: Source) -> Result<(), ModelError> {
             "fraction of H: places further apart than two bodies miss whole seats",
         ),
         (
+            hyp.key("surface").key("radius"),
+            h.surface.map_or(0.5, |a| a.radius),
+            0.0,
+            2.0,
+            "fraction of H: beyond two bodies the surface measured is no longer the place's",
+        ),
+        (
             Key::top("suppression_radius"),
             file.suppression_radius,
             0.0,
@@ -709,6 +740,27 @@ fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
     if let Some(v) = h.spacing {
         if !Positive.holds(v) {
             return Err(src.invalid(&hyp.key("spacing"), Positive.what(v)));
+        }
+    }
+    if let Some(a) = h.surface {
+        let surface = hyp.key("surface");
+        for (key, v) in [
+            ("radius", a.radius),
+            ("tolerance", a.tolerance),
+            ("min_width", a.min_width),
+        ] {
+            if !Positive.holds(v) {
+                return Err(src.invalid(&surface.key(key), Positive.what(v)));
+            }
+        }
+        if !(a.elongation.is_finite() && a.elongation >= 1.0) {
+            return Err(src.invalid(
+                &surface.key("elongation"),
+                format!(
+                    "must be at least 1 (a ratio of spreads), not {}",
+                    a.elongation
+                ),
+            ));
         }
     }
     if let Some(k) = f.yaw_offsets.iter().position(|y| !y.is_finite()) {
@@ -1362,6 +1414,41 @@ mod tests {
             "height = [0.14, 0.34, 0.21, 0.40]",
         );
         names(&e, line, "hypothesis.height", "increasing order");
+    }
+
+    #[test]
+    fn a_bad_surface_rule_is_named() {
+        let rule =
+            "surface = { radius = 0.5, tolerance = 0.05, min_width = 0.40, elongation = 1.3 }";
+        let lying = crate::model::set::BUILTIN_LYING;
+        assert_eq!(lying.matches(rule).count(), 1);
+        assert!(load(lying).unwrap().hypothesis.surface.is_some());
+        for (to, key, what) in [
+            (
+                rule.replace("elongation = 1.3", "elongation = 0.5"),
+                "elongation",
+                "at least 1",
+            ),
+            (
+                rule.replace("min_width = 0.40", "min_width = 0.0"),
+                "min_width",
+                "positive",
+            ),
+            (
+                rule.replace("radius = 0.5", "radius = 3.0"),
+                "radius",
+                "outside",
+            ),
+        ] {
+            let bad = lying.replace(rule, &to);
+            let line = line_of(&bad, &to, 0);
+            names(
+                &error(&bad),
+                line,
+                &format!("hypothesis.surface.{key}"),
+                what,
+            );
+        }
     }
 
     #[test]
