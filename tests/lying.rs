@@ -104,10 +104,14 @@ fn a_flat_bed_affords_lying_flat_with_stretched_legs() {
 /// towards +x (heading 0), then unfolded: the hierarchy's answer for that one placement
 /// (the whole detector may also find other ways to lie on the same bed).
 fn unfolded_at(m: &Mesh, height: f64, x: f64) -> Vec<String> {
+    unfolded_in(&cloud(m), height, x)
+}
+
+/// [`unfolded_at`] in a cloud.
+fn unfolded_in(c: &PointCloud, height: f64, x: f64) -> Vec<String> {
     let (agent, h) = lying(height);
     let cfg = DetectConfig::default();
-    let c = cloud(m);
-    let prepared = prepare(&c, &cfg);
+    let prepared = prepare(c, &cfg);
     let top = 0.5;
     let hyp = Hypothesis {
         cell: (0, 0),
@@ -216,6 +220,58 @@ fn a_sofa_is_for_sitting_and_a_narrow_bed_for_lying() {
     check(&bed, &["lying", "elongated_body", "stretched_legs"]);
 }
 
+/// The points of `c` with x in `range` (the rest out of the camera's view).
+fn seen(c: &PointCloud, range: std::ops::Range<f64>) -> PointCloud {
+    PointCloud::new(
+        c.points
+            .iter()
+            .filter(|p| range.contains(&p.x))
+            .copied()
+            .collect(),
+    )
+}
+
+#[test]
+fn a_bed_cut_by_the_image_edge_affords_lying_on_what_is_in_view() {
+    // A 2 m bed whose last 0.8 m, and the floor beyond, the camera does not see: the heels
+    // over unseen space are not refuted (`unseen_reach`), the head rests on the mattress.
+    let mut m = Mesh::new();
+    mattress(&mut m, -1.0, 1.0, 0.5);
+    let c = cloud(&m);
+    for height in [1.65, 1.85] {
+        let (agent, h) = lying(height);
+        let o = detect(&seen(&c, -3.0..0.2), &agent, &h, &DetectConfig::default());
+        assert_eq!(
+            affords(&o),
+            ["lying", "elongated_body", "stretched_legs"],
+            "at {height} m: {:?}",
+            o.stats
+        );
+    }
+}
+
+#[test]
+fn one_end_of_the_body_must_rest_on_a_surface_in_view() {
+    // Along the bed, the pelvis at its middle: the head and the heels are over the
+    // mattress when all of it is seen, over unseen space at one end (found) or at both
+    // (not found) when the camera sees only part of it.
+    let mut m = Mesh::new();
+    mattress(&mut m, -1.0, 1.0, 0.5);
+    let c = cloud(&m);
+    let lying_flat = ["lying", "elongated_body", "stretched_legs"];
+    for height in [1.65, 1.85] {
+        assert_eq!(
+            unfolded_in(&c, height, 0.0),
+            lying_flat,
+            "all seen, {height} m"
+        );
+        let one = unfolded_in(&seen(&c, -3.0..0.45), height, 0.0);
+        assert_eq!(one, lying_flat, "the foot end unseen, {height} m");
+        let both = unfolded_in(&seen(&c, -0.45..0.45), height, 0.0);
+        assert!(both.is_empty(), "both ends unseen, {height} m: {both:?}");
+    }
+}
+
 #[test]
 fn a_short_bench_and_a_chair_do_not_afford_lying() {
     let short = BenchParams {
@@ -231,7 +287,9 @@ fn a_short_bench_and_a_chair_do_not_afford_lying() {
 fn a_child_and_an_adult_run_in_one_pass_over_one_scene() {
     // A 1.2 m seat of 0.45 m: too short for an adult to lie on, long enough for a child of
     // 1.20 m (back of the head to ankles ~1.0 m); both bodies see the same voxelised scene.
-    let mut m = Mesh::new();
+    // The floor of the room round it is seen (where the scan saw nothing, an adult's head
+    // could hang over the edge: `unseen_reach`).
+    let mut m = floor(-2.0, -2.0, 2.0, 2.0);
     m.add_box(
         Point3::new(-0.6, -0.35, 0.0),
         Point3::new(0.6, 0.35, 0.40),

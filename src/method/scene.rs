@@ -406,6 +406,27 @@ impl Scene {
         }
     }
 
+    /// Whether the scan saw anything in the column below `p`: some voxel within `reach`
+    /// metres of the vertical line from `p` down to the lowest voxel of the scene. The
+    /// floor plane the scene assumes does not count: it is not seen. Marches down by the
+    /// clearance bound, at least half a voxel per step.
+    pub fn sees_below(&self, p: &Point3<f64>, reach: f64) -> bool {
+        let Some((lo, _)) = self.occupied else {
+            return false;
+        };
+        let mut q = *p;
+        while q.z >= lo.z - reach {
+            let c = self.point_clearance(&q);
+            if c <= reach {
+                return true;
+            }
+            // Every point of the line within c - reach below q is further than `reach`
+            // from any voxel.
+            q.z -= (c - reach).max(self.voxel / 2.0);
+        }
+        false
+    }
+
     /// Distance (metres, >= 0) from the surface of a body part of radius `radius` whose axis
     /// passes through `p` to the nearest voxel or the floor: the d_i of Eq. 1.
     pub fn surface_distance(&self, p: &Point3<f64>, radius: f64) -> f64 {
@@ -1252,6 +1273,27 @@ mod tests {
             }
         }
         PointCloud::new(pts)
+    }
+
+    #[test]
+    fn the_scan_sees_below_a_slab_and_not_beside_it() {
+        // A slab 0.6 m square at 0.45 m, a floor patch 0.3 m square at 0 beside it, and
+        // the assumed floor plane (which is not seen).
+        let mut cloud = slab(0.45);
+        for i in 0..30 {
+            for j in 0..30 {
+                cloud
+                    .points
+                    .push(Point3::new(1.0 + i as f64 * 0.01, j as f64 * 0.01, 0.0));
+            }
+        }
+        let s = Scene::new(&cloud, &cfg(true));
+        let at = |x: f64, y: f64| s.sees_below(&Point3::new(x, y, 0.8), 0.1);
+        assert!(at(0.3, 0.3), "over the slab");
+        assert!(at(1.1, 0.1), "over the floor patch");
+        assert!(at(0.65, 0.3), "within the reach of the slab's edge");
+        assert!(!at(0.8, 0.3), "between them: nothing seen below");
+        assert!(!at(0.3, 2.0), "beyond everything");
     }
 
     fn vertical(x: f64, y: f64, bottom: f64, top: f64, r: f64) -> Cylinder {

@@ -228,8 +228,17 @@ impl NodeContext<'_> {
 
     /// `support`: whether the branch's support parts (if the node has any that the branch
     /// moves) rest on the scene at sweep parameter `t`: some part has the scene within
-    /// `support_gap` below it.
+    /// `support_gap` below it, or (with `unseen_reach`) space the scan never saw.
     pub fn support(&self, posture: &Posture, branch: &[usize], t: f64) -> bool {
+        let mut p = posture.clone();
+        self.at(branch, t, &mut p);
+        self.resting(&p, branch) != Rest::Free
+    }
+
+    /// How the branch's support parts rest in `posture` as posed: on a seen surface
+    /// within `support_gap` below some part ([`Rest::Seen`]), else over a column where
+    /// the scan saw nothing within `unseen_reach` ([`Rest::Unseen`]), else not at all.
+    fn resting(&self, p: &Posture, branch: &[usize]) -> Rest {
         let (agent, node, scene) = (self.agent, self.node, self.scene);
         let mine: Vec<(usize, [f64; 2])> = node
             .support
@@ -242,28 +251,37 @@ impl NodeContext<'_> {
             })
             .collect();
         if mine.is_empty() {
-            return true;
+            return Rest::NoParts;
         }
-        let mut p = posture.clone();
-        self.at(branch, t, &mut p);
         let mut frames = Vec::new();
-        agent.forward_kinematics(self.place, &p, &mut frames);
+        agent.forward_kinematics(self.place, p, &mut frames);
         let step = scene.voxel_size();
-        agent
-            .cylinders(&frames, |j| mine.iter().any(|(l, _)| *l == j))
+        let mut samples = Vec::new();
+        for c in agent.cylinders(&frames, |j| mine.iter().any(|(l, _)| *l == j)) {
+            let [s0, s1] = mine
+                .iter()
+                .find(|(l, _)| *l == c.joint)
+                .map_or([0.0, 1.0], |m| m.1);
+            let d = c.b - c.a;
+            let n = to_usize(((d.norm() * (s1 - s0)) / step).ceil().max(1.0));
+            samples.extend(
+                (0..=n).map(|i| (c.a + d * (s0 + (s1 - s0) * i as f64 / n as f64), c.radius)),
+            );
+        }
+        let gap = node.support_gap;
+        if samples
             .iter()
-            .any(|c| {
-                let [s0, s1] = mine
-                    .iter()
-                    .find(|(l, _)| *l == c.joint)
-                    .map_or([0.0, 1.0], |m| m.1);
-                let d = c.b - c.a;
-                let n = to_usize(((d.norm() * (s1 - s0)) / step).ceil().max(1.0));
-                (0..=n).any(|i| {
-                    let q = c.a + d * (s0 + (s1 - s0) * i as f64 / n as f64);
-                    scene.drop_below(&q, c.radius + node.support_gap) - c.radius <= node.support_gap
-                })
-            })
+            .any(|(q, r)| scene.drop_below(q, r + gap) - r <= gap)
+        {
+            Rest::Seen
+        } else if node
+            .unseen_reach
+            .is_some_and(|reach| samples.iter().any(|(q, _)| !scene.sees_below(q, reach)))
+        {
+            Rest::Unseen
+        } else {
+            Rest::Free
+        }
     }
 
     /// `fallback`: for a branch whose sweep found nothing, sets the node's fallback joints
@@ -479,6 +497,15 @@ impl NodeContext<'_> {
             if node.contact == crate::model::hierarchy::ContactRule::All {
                 found &= all_found;
             }
+            // Space the scan never saw may hold one end of the body, not every end: some
+            // branch with support parts rests on a surface it saw.
+            if found && node.unseen_reach.is_some() {
+                let rests: Vec<Rest> = branches
+                    .iter()
+                    .map(|b| self.resting(&node_posture, b))
+                    .collect();
+                found = rests.contains(&Rest::Seen) || rests.iter().all(|r| *r == Rest::NoParts);
+            }
             let better = match &outcome {
                 None => true,
                 Some((bf, bl, _)) => (found && !*bf) || (found == *bf && local > *bl),
@@ -496,6 +523,19 @@ impl NodeContext<'_> {
         }
         (found, local)
     }
+}
+
+/// How a branch's support parts rest ([`NodeContext::resting`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Rest {
+    /// The branch moves none of the node's support parts.
+    NoParts,
+    /// Some part has a surface the scan saw within `support_gap` below it.
+    Seen,
+    /// None has, but some part is over space the scan never saw (`unseen_reach`).
+    Unseen,
+    /// Neither: the parts hang over seen space with nothing below them.
+    Free,
 }
 
 /// Groups a node's sweeps (by index) into kinematic branches: sweeps that move a common

@@ -191,6 +191,11 @@ pub struct Node {
     pub support: Vec<(usize, [f64; 2])>,
     /// See `support`, metres.
     pub support_gap: f64,
+    /// A support part over a column of space in which the scan saw nothing within this
+    /// many metres (horizontally) of the vertical line below it is not refuted and counts
+    /// as resting: a bed cut by the image edge, or whose far end the camera cannot see.
+    /// `None`: only a surface counts.
+    pub unseen_reach: Option<f64>,
 }
 
 /// How many of a node's kinematic branches must touch for its affordance to be found.
@@ -359,6 +364,8 @@ struct NodeFile {
     support: Vec<LinkRef>,
     #[serde(default)]
     support_gap: f64,
+    #[serde(default)]
+    unseen_reach: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -886,6 +893,15 @@ fn resolve_node(
     if !(n.support_gap.is_finite() && n.support_gap >= 0.0) {
         return Err(src.invalid(&key.key("support_gap"), "must be 0 or more metres"));
     }
+    if let Some(r) = n.unseen_reach {
+        // Beyond a body's width no gap in a scan is a place the body could rest on.
+        if !(r > 0.0 && r <= 1.0) {
+            return Err(src.invalid(
+                &key.key("unseen_reach"),
+                format!("must be more than 0 and at most 1 metre, not {r}"),
+            ));
+        }
+    }
     if links.is_empty() {
         return Err(src.invalid(&key.key("links"), "a node needs at least one link to check"));
     }
@@ -1041,6 +1057,7 @@ fn resolve_node(
         contact: n.contact,
         support,
         support_gap: n.support_gap,
+        unseen_reach: n.unseen_reach,
     })
 }
 
