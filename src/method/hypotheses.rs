@@ -4,7 +4,7 @@
 use nalgebra::{Matrix3, Point3, Vector3};
 
 use crate::method::fuzzy::{rule, Trapezoid};
-use crate::method::heightmap::HeightMap;
+use crate::method::heightmap::{Cells, HeightMap};
 use crate::model::hierarchy::{HypothesisRule, Orientation};
 use crate::num::to_usize;
 
@@ -41,14 +41,26 @@ pub fn hypotheses(
     let step = rule_
         .spacing
         .map_or(1, |s| to_usize((s * body_height / map.cell).round()).max(1));
+    // Rows above and below a cell that its template and neighbourhood read.
+    let reach = template
+        .iter()
+        .chain(&neighbourhood)
+        .map(|&(_, dy)| dy.unsigned_abs())
+        .max()
+        .unwrap_or(0);
+    let mut band = Band::default();
     let mut out = Vec::new();
     for iy in (0..map.ny).step_by(step) {
-        for ix in (0..map.nx).step_by(step) {
+        if !band.holds(iy, reach) {
+            band.fill(map, iy, reach);
+        }
+        // Tiles of the map that no point reaches hold no valid cell to rate.
+        for ix in map.stored_columns(iy, step) {
             let Some(Rating {
                 mean,
                 top,
                 memberships,
-            }) = rate(map, ix, iy, &template, height.as_ref(), rule_)
+            }) = rate(&band, ix, iy, &template, height.as_ref(), rule_)
             else {
                 continue;
             };
@@ -59,13 +71,12 @@ pub fn hypotheses(
             if !verdict.available {
                 continue;
             }
-            let heading =
-                descent(map, ix, iy, &neighbourhood, rule_.flat_gradient).map(
-                    |d| match orientation {
-                        Orientation::Parallel => d,
-                        Orientation::Orthogonal => d + std::f64::consts::FRAC_PI_2,
-                    },
-                );
+            let heading = descent(&band, ix, iy, &neighbourhood, rule_.flat_gradient).map(|d| {
+                match orientation {
+                    Orientation::Parallel => d,
+                    Orientation::Orthogonal => d + std::f64::consts::FRAC_PI_2,
+                }
+            });
             let (x, y) = map.centre(ix, iy);
             out.push(Hypothesis {
                 cell: (ix, iy),
@@ -78,6 +89,65 @@ pub fn hypotheses(
         }
     }
     out
+}
+
+/// Rows of a band of the map read by the rating of its cells.
+const BAND_ROWS: usize = 32;
+
+/// [`BAND_ROWS`] rows of the height map and `reach` rows on either side, copied into one
+/// dense row-major block: the template and neighbourhood of every cell in the band are
+/// then read with a multiply each instead of a tile look-up (each cell is read about a
+/// hundred times). Reads the same heights as [`HeightMap::get`] for rows it holds.
+#[derive(Default)]
+struct Band {
+    /// Map row of the block's first row (may be negative).
+    iy0: isize,
+    /// Rows held.
+    rows: usize,
+    /// Columns per row: the map's `nx`.
+    nx: usize,
+    /// The map's cell edge, metres.
+    cell: f64,
+    /// Heights, row-major.
+    heights: Vec<Option<f64>>,
+}
+
+impl Band {
+    /// Whether rows `iy - reach ..= iy + reach` are all held.
+    fn holds(&self, iy: usize, reach: usize) -> bool {
+        let (lo, hi) = (iy as isize - reach as isize, iy + reach);
+        self.rows > 0 && lo >= self.iy0 && (hi as isize) < self.iy0 + self.rows as isize
+    }
+
+    /// Holds rows `iy - reach .. iy + BAND_ROWS + reach` of `map` (invalid outside it).
+    fn fill(&mut self, map: &HeightMap, iy: usize, reach: usize) {
+        self.iy0 = iy as isize - reach as isize;
+        self.rows = BAND_ROWS + 2 * reach;
+        self.nx = map.nx;
+        self.cell = map.cell;
+        self.heights.clear();
+        self.heights.resize(self.rows * self.nx, None);
+        for (r, row) in self.heights.chunks_mut(self.nx.max(1)).enumerate() {
+            if let Ok(y) = usize::try_from(self.iy0 + r as isize) {
+                map.copy_row(y, row);
+            }
+        }
+    }
+}
+
+impl Cells for Band {
+    /// Height of map cell `(ix, iy)`; `None` if invalid, outside the map or not held.
+    fn height(&self, ix: isize, iy: isize) -> Option<f64> {
+        let r = iy - self.iy0;
+        if ix < 0 || r < 0 || ix as usize >= self.nx || r as usize >= self.rows {
+            return None;
+        }
+        self.heights[r as usize * self.nx + ix as usize]
+    }
+
+    fn cell_size(&self) -> f64 {
+        self.cell
+    }
 }
 
 /// What the fuzzy rule of section 4.1 sees at one cell: the template's statistics and the
@@ -95,17 +165,17 @@ pub struct Rating {
 /// Rates cell `(ix, iy)` of `map` with the torso `template` (cell offsets) and the
 /// `height` set already in metres; `None` if the cell is invalid.
 pub fn rate(
-    map: &HeightMap,
+    map: &impl Cells,
     ix: usize,
     iy: usize,
     template: &[(isize, isize)],
     height: Option<&Trapezoid>,
     rule_: &HypothesisRule,
 ) -> Option<Rating> {
-    map.get(ix as isize, iy as isize)?;
+    map.height(ix as isize, iy as isize)?;
     let (mut n, mut sum, mut sum2, mut top) = (0usize, 0.0, 0.0, f64::MIN);
     for &(dx, dy) in template {
-        if let Some(h) = map.get(ix as isize + dx, iy as isize + dy) {
+        if let Some(h) = map.height(ix as isize + dx, iy as isize + dy) {
             n += 1;
             sum += h;
             sum2 += h * h;
@@ -129,18 +199,19 @@ pub fn rate(
 /// Direction (radians about z) of steepest descent of the least-squares plane through the
 /// valid cells of the neighbourhood; `None` if the slope is below `flat` (m/m).
 pub fn descent(
-    map: &HeightMap,
+    map: &impl Cells,
     ix: usize,
     iy: usize,
     neighbourhood: &[(isize, isize)],
     flat: f64,
 ) -> Option<f64> {
+    let cell = map.cell_size();
     // Normal equations of h = a + gx * dx + gy * dy, dx and dy in metres.
     let mut ata = Matrix3::<f64>::zeros();
     let mut atb = Vector3::<f64>::zeros();
     for &(dx, dy) in neighbourhood {
-        if let Some(h) = map.get(ix as isize + dx, iy as isize + dy) {
-            let row = Vector3::new(1.0, dx as f64 * map.cell, dy as f64 * map.cell);
+        if let Some(h) = map.height(ix as isize + dx, iy as isize + dy) {
+            let row = Vector3::new(1.0, dx as f64 * cell, dy as f64 * cell);
             ata += row * row.transpose();
             atb += row * h;
         }
@@ -184,15 +255,8 @@ mod tests {
 
     fn map(f: impl Fn(usize, usize) -> Option<f64>) -> HeightMap {
         let (nx, ny) = (20, 20);
-        let heights = (0..nx * ny).map(|i| f(i % nx, i / nx)).collect();
-        HeightMap {
-            x0: 0.0,
-            y0: 0.0,
-            cell: 0.05,
-            nx,
-            ny,
-            heights,
-        }
+        let heights: Vec<Option<f64>> = (0..nx * ny).map(|i| f(i % nx, i / nx)).collect();
+        HeightMap::from_dense(0.0, 0.0, 0.05, nx, ny, &heights)
     }
 
     #[test]
@@ -262,5 +326,66 @@ mod tests {
             (d + std::f64::consts::FRAC_PI_2).abs() < 1e-9,
             "heading {d}"
         );
+    }
+
+    /// A band of rows answers as the map for every cell its template and neighbourhood
+    /// read: `rate` and `descent` on the band against the same on the map, bit for bit,
+    /// for every cell, on seeded maps (a dense one with holes and slopes, a tiled one
+    /// built from far-apart patches of points), bands filled as `hypotheses` fills them.
+    #[test]
+    fn bands_rate_as_the_map_does() {
+        use crate::cloud::PointCloud;
+        use crate::method::heightmap::HeightMapConfig;
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (nx, ny) = (23, 2 * BAND_ROWS + 9);
+        let dense: Vec<Option<f64>> = (0..nx * ny)
+            .map(|i| {
+                let slope = 0.45 + 0.01 * (i % nx) as f64 - 0.004 * (i / nx) as f64;
+                (rng.random_range(0.0..1.0) < 0.8).then(|| slope + rng.random_range(0.0..0.01))
+            })
+            .collect();
+        let mut pts = Vec::new();
+        for _ in 0..6 {
+            let (x0, y0) = (rng.random_range(-4.0..4.0), rng.random_range(-4.0..4.0));
+            let z = rng.random_range(0.3..0.6);
+            for k in 0..400 {
+                let (u, v) = ((k % 20) as f64 * 0.02, (k / 20) as f64 * 0.02);
+                pts.push(Point3::new(x0 + u, y0 + v, z + 0.1 * u));
+            }
+        }
+        let maps = [
+            HeightMap::from_dense(0.0, 0.0, 0.05, nx, ny, &dense),
+            HeightMap::from_cloud(&PointCloud::new(pts), &HeightMapConfig::default()),
+        ];
+        let r = rule_();
+        let height = r.height.map(|t| t.scaled(1.0));
+        let mut compared = 0;
+        for map in &maps {
+            for radius in [0.1, 0.2] {
+                let template = map.disc(radius);
+                let reach = template
+                    .iter()
+                    .map(|&(_, dy)| dy.unsigned_abs())
+                    .max()
+                    .unwrap();
+                let mut band = Band::default();
+                for iy in 0..map.ny {
+                    if !band.holds(iy, reach) {
+                        band.fill(map, iy, reach);
+                    }
+                    for ix in 0..map.nx {
+                        let want = rate(map, ix, iy, &template, height.as_ref(), &r);
+                        let got = rate(&band, ix, iy, &template, height.as_ref(), &r);
+                        assert_eq!(format!("{got:?}"), format!("{want:?}"), "{ix} {iy}");
+                        let want = descent(map, ix, iy, &template, 1e-3);
+                        let got = descent(&band, ix, iy, &template, 1e-3);
+                        assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits));
+                        compared += usize::from(want.is_some());
+                    }
+                }
+            }
+        }
+        assert!(compared > 1000, "{compared}");
     }
 }
