@@ -250,8 +250,11 @@ impl HeightMap {
             let (fx, fy, ix, iy) = own(p);
             out.push((ix, iy));
             let (ix, iy) = (ix as isize, iy as isize);
-            for dy in -r..=r {
-                for dx in -r..=r {
+            // A cell centre within `reach` is at most `reach / cell + 0.5` cells from the
+            // point's cell, so cells beyond `ceil(reach / cell)` need no test.
+            let rp = to_isize((reach / cell).ceil()).min(r);
+            for dy in -rp..=rp {
+                for dx in -rp..=rp {
                     let (jx, jy) = (ix + dx, iy + dy);
                     if (dx, dy) == (0, 0)
                         || jx < 0
@@ -269,9 +272,8 @@ impl HeightMap {
             }
         };
         // The tiles that some point may reach are stored, numbered in tile order: those
-        // of the cells within `ceil(reach / cell)` columns and rows of its own, a square
-        // holding every cell `cells_of` gives (a cell centre within `reach` is at most
-        // `reach / cell + 0.5` cells from the point's cell).
+        // of the cells within `ceil(reach / cell)` columns and rows of its own, the square
+        // `cells_of` looks in.
         let mut map = HeightMap::empty(lo.x, lo.y, cell, nx, ny);
         for (p, &reach) in cloud.points.iter().zip(&reaches) {
             let (_, _, ix, iy) = own(p);
