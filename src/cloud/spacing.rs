@@ -6,11 +6,10 @@
 //! mesh vertices ~4 cm, a 20k-point room view 5-10 cm; stages that look at cells of a few
 //! centimetres use it to tell a hole in a surface from a gap between samples.
 
-use std::collections::{HashMap, HashSet};
-
 use nalgebra::Point3;
 
 use super::PointCloud;
+use crate::cellhash::{CellMap, CellSet};
 use crate::num::{to_i64, to_usize};
 
 /// Points whose neighbours [`point_spacing`] measures: evenly spread over the cloud's order.
@@ -112,14 +111,14 @@ pub(crate) fn neighbour_distance(
         .step_by(step)
         .map(|(i, p)| (i, *p))
         .collect();
-    let mut wanted: HashSet<[i64; 3]> = HashSet::new();
+    let mut wanted: CellSet<[i64; 3]> = CellSet::default();
     for (_, q) in &queries {
         let Some(c) = key(q) else { continue };
         for d in neighbourhood() {
             wanted.insert([c[0] + d[0], c[1] + d[1], c[2] + d[2]]);
         }
     }
-    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    let mut grid: CellMap<[i64; 3], Vec<usize>> = CellMap::default();
     for (i, p) in cloud.points.iter().enumerate() {
         if let Some(c) = key(p).filter(|c| wanted.contains(c)) {
             let list = grid.entry(c).or_default();
@@ -175,7 +174,7 @@ pub struct TileSpacing {
     tile: f64,
     /// The spacing of each tile that has one, by tile key; tiles without points are not
     /// stored, so memory follows the points, not the cloud's box.
-    values: HashMap<[i64; 3], f64>,
+    values: CellMap<[i64; 3], f64>,
 }
 
 impl TileSpacing {
@@ -185,9 +184,10 @@ impl TileSpacing {
         let mut out = TileSpacing {
             lo,
             tile,
-            values: HashMap::new(),
+            values: CellMap::default(),
         };
-        let mut members: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+        // Visited in the map's order, but each tile's value depends on its own points only.
+        let mut members: CellMap<[i64; 3], Vec<usize>> = CellMap::default();
         for (i, p) in cloud.points.iter().enumerate() {
             if let Some(k) = out.key(p) {
                 members.entry(k).or_default().push(i);
