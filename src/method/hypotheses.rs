@@ -91,8 +91,9 @@ pub fn hypotheses(
     out
 }
 
-/// Rows of a band of the map read by the rating of its cells.
-const BAND_ROWS: usize = 32;
+/// Rows of a band of the map whose cells are rated from one copy: 64 rows and the 2 x 8
+/// rows their neighbourhoods read (0.44 m at 5 cm) copy each row 1.25 times.
+const BAND_ROWS: usize = 64;
 
 /// [`BAND_ROWS`] rows of the height map and `reach` rows on either side, copied into one
 /// dense row-major block: the template and neighbourhood of every cell in the band are
@@ -125,11 +126,12 @@ impl Band {
         self.rows = BAND_ROWS + 2 * reach;
         self.nx = map.nx;
         self.cell = map.cell;
-        self.heights.clear();
+        // Every cell is written below: rows of the map by `copy_row`, the others here.
         self.heights.resize(self.rows * self.nx, None);
         for (r, row) in self.heights.chunks_mut(self.nx.max(1)).enumerate() {
-            if let Ok(y) = usize::try_from(self.iy0 + r as isize) {
-                map.copy_row(y, row);
+            match usize::try_from(self.iy0 + r as isize) {
+                Ok(y) if y < map.ny => map.copy_row(y, row),
+                _ => row.fill(None),
             }
         }
     }
