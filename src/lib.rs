@@ -54,6 +54,7 @@
 //! # Ok::<(), afford::model::ModelError>(())
 //! ```
 
+mod cellhash;
 pub mod cloud;
 pub mod detect;
 pub mod embed;

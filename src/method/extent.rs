@@ -16,11 +16,11 @@
 //! World frame: metres, z up. Nothing here changes a cloud that has no stray region.
 
 use std::borrow::Cow;
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use nalgebra::Point3;
 
+use crate::cellhash::CellMap;
 use crate::cloud::PointCloud;
 use crate::detect::DetectConfig;
 use crate::num::to_i64;
@@ -186,7 +186,8 @@ pub fn grid_bytes(extent: [f64; 3], cfg: &DetectConfig, reach: f64) -> f64 {
 /// by face, edge or corner) that holds at least `share` of the points, or in the largest.
 fn bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
     let key = |p: &Point3<f64>| p.coords.map(|c| to_i64((c / cell).floor()));
-    let mut cells: HashMap<[i64; 3], usize> = HashMap::new();
+    // Cells numbered in the points' order and only looked up: the map's order is unused.
+    let mut cells: CellMap<[i64; 3], usize> = CellMap::default();
     let mut of_point = Vec::with_capacity(points.len());
     let mut keys: Vec<[i64; 3]> = Vec::new();
     for p in points {

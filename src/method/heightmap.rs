@@ -79,8 +79,18 @@ impl Default for HeightMapConfig {
     }
 }
 
-/// A height map over the x-y plane (metres, z up).
-#[derive(Debug, Clone, PartialEq)]
+/// Side of the square tiles the height map stores, in cells: only tiles that some point
+/// reaches are kept, so memory follows the points, not their bounding box (a 200 m floor
+/// sampled every metre keeps a fifth of its tiles). 8 x 8 cells (0.4 m at 5 cm) are 1 KiB
+/// of heights, and the index over all tiles is a 64th of the cells.
+const TILE: usize = 8;
+/// A tile that no point reaches: every cell of it is invalid and it is not stored.
+const NO_TILE: usize = usize::MAX;
+
+/// A height map over the x-y plane (metres, z up): `nx` x `ny` square cells from the corner
+/// `(x0, y0)`, stored in tiles of [`TILE`] x [`TILE`] cells of which only those holding a
+/// point are kept.
+#[derive(Debug, Clone)]
 pub struct HeightMap {
     /// World x of the lower edge of column 0, metres.
     pub x0: f64,
@@ -92,11 +102,115 @@ pub struct HeightMap {
     pub nx: usize,
     /// Number of rows (along y).
     pub ny: usize,
-    /// Surface height per cell, row-major (`iy * nx + ix`); `None` where the cell is invalid.
-    pub heights: Vec<Option<f64>>,
+    /// Per tile (`ty * tiles_x + tx`, tile `(tx, ty)` holding cells `tx * TILE ..` along x
+    /// and `ty * TILE ..` along y), its index among the stored tiles, or [`NO_TILE`].
+    tiles: Vec<usize>,
+    /// Tiles along x: `nx` over [`TILE`], rounded up.
+    tiles_x: usize,
+    /// Surface height per cell of the stored tiles, `TILE * TILE` per tile, row-major
+    /// within a tile; `None` where the cell is invalid.
+    heights: Vec<Option<f64>>,
+}
+
+/// Read access to the cells of a height map: the map itself, or a copy of some of its
+/// rows that answers as the map does for the rows it holds.
+pub trait Cells {
+    /// Height of cell `(ix, iy)`; `None` if invalid or outside the map.
+    fn height(&self, ix: isize, iy: isize) -> Option<f64>;
+    /// Cell edge length, metres.
+    fn cell_size(&self) -> f64;
+}
+
+impl Cells for HeightMap {
+    fn height(&self, ix: isize, iy: isize) -> Option<f64> {
+        self.get(ix, iy)
+    }
+
+    fn cell_size(&self) -> f64 {
+        self.cell
+    }
+}
+
+impl PartialEq for HeightMap {
+    /// Same grid and the same height in every cell, however the tiles are stored.
+    fn eq(&self, other: &Self) -> bool {
+        (self.x0, self.y0, self.cell, self.nx, self.ny)
+            == (other.x0, other.y0, other.cell, other.nx, other.ny)
+            && (0..self.ny).all(|iy| {
+                (0..self.nx).all(|ix| {
+                    let (x, y) = (ix as isize, iy as isize);
+                    self.get(x, y) == other.get(x, y)
+                })
+            })
+    }
+}
+
+/// Index of the cell `(ix, iy)` within its tile.
+fn in_tile(ix: usize, iy: usize) -> usize {
+    (iy % TILE) * TILE + ix % TILE
 }
 
 impl HeightMap {
+    /// A map of `nx` x `ny` cells of `cell` metres from `(x0, y0)` with the heights given
+    /// row-major (`iy * nx + ix`; cells past the end of `heights` are invalid).
+    pub fn from_dense(
+        x0: f64,
+        y0: f64,
+        cell: f64,
+        nx: usize,
+        ny: usize,
+        heights: &[Option<f64>],
+    ) -> HeightMap {
+        let mut map = HeightMap::empty(x0, y0, cell, nx, ny);
+        map.tiles.fill(0);
+        map.number_tiles();
+        for iy in 0..ny {
+            for ix in 0..nx {
+                let i = map.index(ix, iy);
+                map.heights[i] = heights.get(iy * nx + ix).copied().flatten();
+            }
+        }
+        map
+    }
+
+    /// A map with no tile stored yet (every cell invalid).
+    fn empty(x0: f64, y0: f64, cell: f64, nx: usize, ny: usize) -> HeightMap {
+        let tiles_x = nx.div_ceil(TILE);
+        HeightMap {
+            x0,
+            y0,
+            cell,
+            nx,
+            ny,
+            tiles: vec![NO_TILE; tiles_x * ny.div_ceil(TILE)],
+            tiles_x,
+            heights: Vec::new(),
+        }
+    }
+
+    /// Gives the tiles marked (any value but [`NO_TILE`]) their indices in tile order and
+    /// room for their cells, all invalid.
+    fn number_tiles(&mut self) {
+        let mut n = 0;
+        for s in &mut self.tiles {
+            if *s != NO_TILE {
+                *s = n;
+                n += 1;
+            }
+        }
+        self.heights = vec![None; n * TILE * TILE];
+    }
+
+    /// The tile of cell `(ix, iy)` (inside the map).
+    fn tile_of(&self, ix: usize, iy: usize) -> usize {
+        (iy / TILE) * self.tiles_x + ix / TILE
+    }
+
+    /// Index into `heights` of cell `(ix, iy)`, whose tile is stored.
+    fn index(&self, ix: usize, iy: usize) -> usize {
+        self.tiles[self.tile_of(ix, iy)] * TILE * TILE + in_tile(ix, iy)
+    }
+
     /// Builds the height map of `cloud` (world frame, metres, floor at z = 0) with cells
     /// of `cfg.cell` metres: per cell, the top of the lowest stack of points, a stack
     /// ending under a gap of at least `cfg.overhang_gap`; a cell whose lowest point floats
@@ -105,21 +219,14 @@ impl HeightMap {
     pub fn from_cloud(cloud: &PointCloud, cfg: &HeightMapConfig) -> HeightMap {
         let cell = cfg.cell;
         let Some((lo, hi)) = cloud.bounds() else {
-            return HeightMap {
-                x0: 0.0,
-                y0: 0.0,
-                cell,
-                nx: 0,
-                ny: 0,
-                heights: Vec::new(),
-            };
+            return HeightMap::empty(0.0, 0.0, cell, 0, 0);
         };
         let nx = to_usize(((hi.x - lo.x) / cell).floor()) + 1;
         let ny = to_usize(((hi.y - lo.y) / cell).floor()) + 1;
         let global = point_spacing(cloud);
         let tiles = TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries);
         // How far each point reaches: its tile's spacing, at least the cloud's (looked up
-        // once, for both passes below).
+        // once, for the passes below).
         let reaches: Vec<f64> = cloud
             .points
             .iter()
@@ -133,16 +240,21 @@ impl HeightMap {
         let widest = reaches.iter().copied().fold(0.0, f64::max);
         // Cell offsets a point may reach beyond its own cell (none for dense clouds).
         let r = to_isize((widest / cell).ceil());
-        let cells_of = |p: &Point3<f64>, reach: f64, out: &mut Vec<usize>| {
-            let (x, y) = (p.x, p.y);
+        // The cell holding a point (the last column or row for points on the far edge).
+        let own = |p: &Point3<f64>| {
+            let (fx, fy) = ((p.x - lo.x) / cell, (p.y - lo.y) / cell);
+            (fx, fy, to_usize(fx).min(nx - 1), to_usize(fy).min(ny - 1))
+        };
+        let cells_of = |p: &Point3<f64>, reach: f64, out: &mut Vec<(usize, usize)>| {
             out.clear();
-            let fx = (x - lo.x) / cell;
-            let fy = (y - lo.y) / cell;
-            let ix = to_usize(fx).min(nx - 1) as isize;
-            let iy = to_usize(fy).min(ny - 1) as isize;
-            out.push(iy as usize * nx + ix as usize);
-            for dy in -r..=r {
-                for dx in -r..=r {
+            let (fx, fy, ix, iy) = own(p);
+            out.push((ix, iy));
+            let (ix, iy) = (ix as isize, iy as isize);
+            // A cell centre within `reach` is at most `reach / cell + 0.5` cells from the
+            // point's cell, so cells beyond `ceil(reach / cell)` need no test.
+            let rp = to_isize((reach / cell).ceil()).min(r);
+            for dy in -rp..=rp {
+                for dx in -rp..=rp {
                     let (jx, jy) = (ix + dx, iy + dy);
                     if (dx, dy) == (0, 0)
                         || jx < 0
@@ -154,47 +266,116 @@ impl HeightMap {
                     }
                     let (cx, cy) = ((jx as f64 + 0.5 - fx) * cell, (jy as f64 + 0.5 - fy) * cell);
                     if cx * cx + cy * cy <= reach * reach {
-                        out.push(jy as usize * nx + jx as usize);
+                        out.push((jx as usize, jy as usize));
                     }
                 }
             }
         };
-        // The points' heights grouped by cell (counting sort), then sorted within a cell.
-        let mut start = vec![0usize; nx * ny + 1];
-        let mut cells = Vec::new();
+        // The tiles that some point may reach are stored, numbered in tile order: those
+        // of the cells within `ceil(reach / cell)` columns and rows of its own, the square
+        // `cells_of` looks in.
+        let mut map = HeightMap::empty(lo.x, lo.y, cell, nx, ny);
         for (p, &reach) in cloud.points.iter().zip(&reaches) {
-            cells_of(p, reach, &mut cells);
-            for &c in &cells {
-                start[c + 1] += 1;
+            let (_, _, ix, iy) = own(p);
+            let rp = to_usize((reach / cell).ceil()).min(r.unsigned_abs());
+            for ty in iy.saturating_sub(rp) / TILE..=(iy + rp).min(ny - 1) / TILE {
+                for tx in ix.saturating_sub(rp) / TILE..=(ix + rp).min(nx - 1) / TILE {
+                    map.tiles[ty * map.tiles_x + tx] = 0;
+                }
             }
         }
-        for i in 0..nx * ny {
+        map.number_tiles();
+        let mut cells = Vec::new();
+        // The points' heights grouped by stored cell (counting sort), then sorted within
+        // a cell.
+        let stored = map.heights.len();
+        let mut start = vec![0usize; stored + 1];
+        for (p, &reach) in cloud.points.iter().zip(&reaches) {
+            cells_of(p, reach, &mut cells);
+            for &(jx, jy) in &cells {
+                start[map.index(jx, jy) + 1] += 1;
+            }
+        }
+        for i in 0..stored {
             start[i + 1] += start[i];
         }
         let mut fill = start.clone();
-        let mut zs = vec![0.0f64; start[nx * ny]];
+        let mut zs = vec![0.0f64; start[stored]];
         for (p, &reach) in cloud.points.iter().zip(&reaches) {
             cells_of(p, reach, &mut cells);
-            for &c in &cells {
+            for &(jx, jy) in &cells {
+                let c = map.index(jx, jy);
                 zs[fill[c]] = p.z;
                 fill[c] += 1;
             }
         }
-        let heights: Vec<Option<f64>> = (0..nx * ny)
-            .map(|c| {
-                let column = &mut zs[start[c]..start[c + 1]];
-                column.sort_unstable_by(f64::total_cmp);
-                stack_top(column, cfg)
-            })
-            .collect();
-        HeightMap {
-            x0: lo.x,
-            y0: lo.y,
-            cell,
-            nx,
-            ny,
-            heights,
+        drop(fill);
+        for (c, h) in map.heights.iter_mut().enumerate() {
+            let column = &mut zs[start[c]..start[c + 1]];
+            column.sort_unstable_by(f64::total_cmp);
+            *h = stack_top(column, cfg);
         }
+        map
+    }
+
+    /// Whether any cell of the tile holding cell `(ix, iy)` (inside the map) may be
+    /// valid; `false` means every cell of it is invalid.
+    pub fn tile_stored(&self, ix: usize, iy: usize) -> bool {
+        ix < self.nx && iy < self.ny && self.tiles[self.tile_of(ix, iy)] != NO_TILE
+    }
+
+    /// The first column at or after `ix` in row `iy` whose tile is stored (`nx` if none):
+    /// columns before it hold only invalid cells.
+    pub fn next_stored(&self, ix: usize, iy: usize) -> usize {
+        let mut x = ix;
+        while x < self.nx && !self.tile_stored(x, iy) {
+            x = (x / TILE + 1) * TILE;
+        }
+        x.min(self.nx)
+    }
+
+    /// The columns `0, step, 2 step, ..` of row `iy` whose tiles are stored, in order:
+    /// the others hold only invalid cells. A `step` of 0 counts as 1.
+    pub fn stored_columns(&self, iy: usize, step: usize) -> impl Iterator<Item = usize> + '_ {
+        let step = step.max(1);
+        let mut ix = 0;
+        std::iter::from_fn(move || loop {
+            if iy >= self.ny || ix >= self.nx {
+                return None;
+            }
+            if self.tile_stored(ix, iy) {
+                ix += step;
+                return Some(ix - step);
+            }
+            ix = self.next_stored(ix, iy).div_ceil(step) * step;
+        })
+    }
+
+    /// Row `iy` of the map into `out[..nx]` (the cells of tiles not stored as invalid);
+    /// nothing is written for a row outside the map.
+    pub fn copy_row(&self, iy: usize, out: &mut [Option<f64>]) {
+        if iy >= self.ny {
+            return;
+        }
+        let base = (iy / TILE) * self.tiles_x;
+        for (tx, &slot) in self.tiles[base..base + self.tiles_x].iter().enumerate() {
+            let x0 = tx * TILE;
+            let x1 = (x0 + TILE).min(self.nx).min(out.len());
+            if x0 >= x1 {
+                break;
+            }
+            if slot == NO_TILE {
+                out[x0..x1].fill(None);
+            } else {
+                let from = slot * TILE * TILE + (iy % TILE) * TILE;
+                out[x0..x1].copy_from_slice(&self.heights[from..from + (x1 - x0)]);
+            }
+        }
+    }
+
+    /// The heights of the valid cells, in no particular order.
+    pub fn valid_heights(&self) -> impl Iterator<Item = f64> + '_ {
+        self.heights.iter().flatten().copied()
     }
 
     /// Height of cell `(ix, iy)`; `None` if invalid or outside the map.
@@ -202,7 +383,12 @@ impl HeightMap {
         if ix < 0 || iy < 0 || ix as usize >= self.nx || iy as usize >= self.ny {
             return None;
         }
-        self.heights[iy as usize * self.nx + ix as usize]
+        let (ix, iy) = (ix as usize, iy as usize);
+        let slot = self.tiles[self.tile_of(ix, iy)];
+        if slot == NO_TILE {
+            return None;
+        }
+        self.heights[slot * TILE * TILE + in_tile(ix, iy)]
     }
 
     /// World (x, y) of the centre of cell `(ix, iy)`, metres.
@@ -330,7 +516,7 @@ mod tests {
         // A cell where only a roof was seen (the floor under it hidden) is invalid.
         let roof = square(0.0, 0.0, 0.5, 0.02, 1.2);
         let m = HeightMap::from_cloud(&PointCloud::new(roof), &HeightMapConfig::default());
-        assert!(m.heights.iter().all(|h| h.is_none()));
+        assert_eq!(m.valid_heights().count(), 0);
     }
 
     /// Issue 11: a reconstruction read as mesh vertices samples a seat every ~4-8 cm, so
@@ -435,22 +621,123 @@ mod tests {
     #[test]
     fn empty_cloud_gives_empty_map() {
         let m = HeightMap::from_cloud(&PointCloud::default(), &HeightMapConfig::default());
-        assert_eq!(m.heights.len(), 0);
+        assert_eq!((m.nx, m.ny, m.valid_heights().count()), (0, 0, 0));
         assert_eq!(m.get(0, 0), None);
     }
 
     #[test]
     fn disc_counts_cells_within_radius() {
-        let m = HeightMap {
-            x0: 0.0,
-            y0: 0.0,
-            cell: 0.05,
-            nx: 0,
-            ny: 0,
-            heights: vec![],
-        };
+        let m = HeightMap::from_dense(0.0, 0.0, 0.05, 0, 0, &[]);
         assert_eq!(m.disc(0.0).len(), 1);
         assert_eq!(m.disc(0.05).len(), 5);
         assert_eq!(m.disc(0.075).len(), 9);
+    }
+
+    /// The map as the dense grid it replaced built it: every cell of the box over x-y,
+    /// each point's z put in its own cell and the cells within its reach, then
+    /// [`stack_top`] per cell (row-major heights).
+    fn dense_reference(cloud: &PointCloud, cfg: &HeightMapConfig) -> Vec<Option<f64>> {
+        let Some((lo, hi)) = cloud.bounds() else {
+            return Vec::new();
+        };
+        let cell = cfg.cell;
+        let nx = to_usize(((hi.x - lo.x) / cell).floor()) + 1;
+        let ny = to_usize(((hi.y - lo.y) / cell).floor()) + 1;
+        let global = point_spacing(cloud);
+        let tiles = TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries);
+        let mut columns: Vec<Vec<f64>> = vec![Vec::new(); nx * ny];
+        for p in &cloud.points {
+            let reach = global.map_or(0.0, |g| {
+                let s = tiles.at(p).map_or(g, |t| t.max(g));
+                (cfg.sample_reach * s).min(cfg.max_reach)
+            });
+            let (fx, fy) = ((p.x - lo.x) / cell, (p.y - lo.y) / cell);
+            let (ix, iy) = (to_usize(fx).min(nx - 1), to_usize(fy).min(ny - 1));
+            columns[iy * nx + ix].push(p.z);
+            // Every cell within the largest reach and a cell of slack.
+            let w = to_usize((cfg.max_reach / cell).ceil()) + 1;
+            for jy in iy.saturating_sub(w)..(iy + w + 1).min(ny) {
+                for jx in ix.saturating_sub(w)..(ix + w + 1).min(nx) {
+                    let (cx, cy) = ((jx as f64 + 0.5 - fx) * cell, (jy as f64 + 0.5 - fy) * cell);
+                    if (jx, jy) != (ix, iy) && cx * cx + cy * cy <= reach * reach {
+                        columns[jy * nx + jx].push(p.z);
+                    }
+                }
+            }
+        }
+        columns
+            .iter_mut()
+            .map(|c| {
+                c.sort_unstable_by(f64::total_cmp);
+                stack_top(c, cfg)
+            })
+            .collect()
+    }
+
+    /// The tiled map against [`dense_reference`], bit for bit in every cell, on seeded
+    /// clouds: patches of different spacings (so points reach several cells), far apart so
+    /// that most tiles hold no point, heights across the stack rules' thresholds.
+    #[test]
+    fn tiles_hold_the_dense_maps_heights() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
+        let (mut seen, mut sparse) = (0, 0);
+        for round in 0..12 {
+            let mut pts = Vec::new();
+            for _ in 0..rng.random_range(1..5) {
+                let (x0, y0) = (rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0));
+                let step = [0.01, 0.04, 0.07, 0.2][rng.random_range(0..4)];
+                let z = [0.0, 0.45, 0.6, 0.9, 1.5][rng.random_range(0..5)];
+                for p in square(x0, y0, rng.random_range(0.1..0.6), step, z) {
+                    let jitter = rng.random_range(-0.004..0.004);
+                    pts.push(Point3::new(p.x + jitter, p.y - jitter, p.z + jitter.abs()));
+                }
+            }
+            let cloud = PointCloud::new(pts);
+            let cfg = HeightMapConfig::default();
+            let m = HeightMap::from_cloud(&cloud, &cfg);
+            let want = dense_reference(&cloud, &cfg);
+            assert_eq!(want.len(), m.nx * m.ny);
+            let mut valid = 0;
+            for iy in 0..m.ny {
+                for ix in 0..m.nx {
+                    let (got, want) = (m.get(ix as isize, iy as isize), want[iy * m.nx + ix]);
+                    assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "{round}");
+                    valid += usize::from(want.is_some());
+                }
+            }
+            assert_eq!(m.valid_heights().count(), valid);
+            seen += valid;
+            sparse += usize::from(m.tiles.contains(&NO_TILE));
+            // Skipping the tiles no point reaches skips only invalid cells.
+            for step in [1, 2, 3, 9] {
+                for iy in 0..m.ny {
+                    let all: Vec<usize> = (0..m.nx)
+                        .step_by(step)
+                        .filter(|&ix| m.tile_stored(ix, iy))
+                        .collect();
+                    let got: Vec<usize> = m.stored_columns(iy, step).collect();
+                    assert_eq!(got, all);
+                    assert!((0..m.nx)
+                        .filter(|&ix| !m.tile_stored(ix, iy))
+                        .all(|ix| m.get(ix as isize, iy as isize).is_none()));
+                }
+            }
+            // Rows copied out are the map's rows.
+            let mut row = vec![Some(-1.0); m.nx];
+            for iy in 0..m.ny {
+                m.copy_row(iy, &mut row);
+                let want: Vec<Option<f64>> = (0..m.nx)
+                    .map(|ix| m.get(ix as isize, iy as isize))
+                    .collect();
+                assert_eq!(row, want);
+            }
+            // The dense constructor and the comparison see the same map.
+            assert_eq!(
+                HeightMap::from_dense(m.x0, m.y0, m.cell, m.nx, m.ny, &want),
+                m
+            );
+        }
+        assert!(seen > 300 && sparse > 3, "{seen} {sparse}");
     }
 }

@@ -4,7 +4,7 @@
 use nalgebra::{Matrix3, Point3, Vector3};
 
 use crate::method::fuzzy::{rule, Trapezoid};
-use crate::method::heightmap::HeightMap;
+use crate::method::heightmap::{Cells, HeightMap};
 use crate::model::hierarchy::{HypothesisRule, Orientation};
 use crate::num::to_usize;
 
@@ -42,14 +42,26 @@ pub fn hypotheses(
     let step = rule_
         .spacing
         .map_or(1, |s| to_usize((s * body_height / map.cell).round()).max(1));
+    // Rows above and below a cell that its template and neighbourhood read.
+    let reach = template
+        .iter()
+        .chain(&neighbourhood)
+        .map(|&(_, dy)| dy.unsigned_abs())
+        .max()
+        .unwrap_or(0);
+    let mut band = Band::default();
     let mut out = Vec::new();
     for iy in (0..map.ny).step_by(step) {
-        for ix in (0..map.nx).step_by(step) {
+        if !band.holds(iy, reach) {
+            band.fill(map, iy, reach);
+        }
+        // Tiles of the map that no point reaches hold no valid cell to rate.
+        for ix in map.stored_columns(iy, step) {
             let Some(Rating {
                 mean,
                 top,
                 memberships,
-            }) = rate(map, ix, iy, &template, height.as_ref(), rule_)
+            }) = rate(&band, ix, iy, &template, height.as_ref(), rule_)
             else {
                 continue;
             };
@@ -60,6 +72,7 @@ pub fn hypotheses(
             if !verdict.available {
                 continue;
             }
+            // The surface reaches further than the band's rows: read from the map.
             let shape = surface_rule
                 .as_ref()
                 .map(|(a, disc)| (a, surface(map, ix, iy, disc, mean, a.tolerance)));
@@ -70,11 +83,12 @@ pub fn hypotheses(
             }
             // Where the gradient is flat, the direction across the surface's long axis
             // stands in for the descent (both point across a bed or a bench).
-            let across = descent(map, ix, iy, &neighbourhood, rule_.flat_gradient).or_else(|| {
-                shape
-                    .and_then(|(a, shape)| shape.along(a.elongation))
-                    .map(|along| along + std::f64::consts::FRAC_PI_2)
-            });
+            let across =
+                descent(&band, ix, iy, &neighbourhood, rule_.flat_gradient).or_else(|| {
+                    shape
+                        .and_then(|(a, shape)| shape.along(a.elongation))
+                        .map(|along| along + std::f64::consts::FRAC_PI_2)
+                });
             let heading = across.map(|d| match orientation {
                 Orientation::Parallel => d,
                 Orientation::Orthogonal => d + std::f64::consts::FRAC_PI_2,
@@ -93,6 +107,67 @@ pub fn hypotheses(
     out
 }
 
+/// Rows of a band of the map whose cells are rated from one copy: 64 rows and the 2 x 8
+/// rows their neighbourhoods read (0.44 m at 5 cm) copy each row 1.25 times.
+const BAND_ROWS: usize = 64;
+
+/// [`BAND_ROWS`] rows of the height map and `reach` rows on either side, copied into one
+/// dense row-major block: the template and neighbourhood of every cell in the band are
+/// then read with a multiply each instead of a tile look-up (each cell is read about a
+/// hundred times). Reads the same heights as [`HeightMap::get`] for rows it holds.
+#[derive(Default)]
+struct Band {
+    /// Map row of the block's first row (may be negative).
+    iy0: isize,
+    /// Rows held.
+    rows: usize,
+    /// Columns per row: the map's `nx`.
+    nx: usize,
+    /// The map's cell edge, metres.
+    cell: f64,
+    /// Heights, row-major.
+    heights: Vec<Option<f64>>,
+}
+
+impl Band {
+    /// Whether rows `iy - reach ..= iy + reach` are all held.
+    fn holds(&self, iy: usize, reach: usize) -> bool {
+        let (lo, hi) = (iy as isize - reach as isize, iy + reach);
+        self.rows > 0 && lo >= self.iy0 && (hi as isize) < self.iy0 + self.rows as isize
+    }
+
+    /// Holds rows `iy - reach .. iy + BAND_ROWS + reach` of `map` (invalid outside it).
+    fn fill(&mut self, map: &HeightMap, iy: usize, reach: usize) {
+        self.iy0 = iy as isize - reach as isize;
+        self.rows = BAND_ROWS + 2 * reach;
+        self.nx = map.nx;
+        self.cell = map.cell;
+        // Every cell is written below: rows of the map by `copy_row`, the others here.
+        self.heights.resize(self.rows * self.nx, None);
+        for (r, row) in self.heights.chunks_mut(self.nx.max(1)).enumerate() {
+            match usize::try_from(self.iy0 + r as isize) {
+                Ok(y) if y < map.ny => map.copy_row(y, row),
+                _ => row.fill(None),
+            }
+        }
+    }
+}
+
+impl Cells for Band {
+    /// Height of map cell `(ix, iy)`; `None` if invalid, outside the map or not held.
+    fn height(&self, ix: isize, iy: isize) -> Option<f64> {
+        let r = iy - self.iy0;
+        if ix < 0 || r < 0 || ix as usize >= self.nx || r as usize >= self.rows {
+            return None;
+        }
+        self.heights[r as usize * self.nx + ix as usize]
+    }
+
+    fn cell_size(&self) -> f64 {
+        self.cell
+    }
+}
+
 /// What the fuzzy rule of section 4.1 sees at one cell: the template's statistics and the
 /// three memberships.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -108,17 +183,17 @@ pub struct Rating {
 /// Rates cell `(ix, iy)` of `map` with the torso `template` (cell offsets) and the
 /// `height` set already in metres; `None` if the cell is invalid.
 pub fn rate(
-    map: &HeightMap,
+    map: &impl Cells,
     ix: usize,
     iy: usize,
     template: &[(isize, isize)],
     height: Option<&Trapezoid>,
     rule_: &HypothesisRule,
 ) -> Option<Rating> {
-    map.get(ix as isize, iy as isize)?;
+    map.height(ix as isize, iy as isize)?;
     let (mut n, mut sum, mut sum2, mut top) = (0usize, 0.0, 0.0, f64::MIN);
     for &(dx, dy) in template {
-        if let Some(h) = map.get(ix as isize + dx, iy as isize + dy) {
+        if let Some(h) = map.height(ix as isize + dx, iy as isize + dy) {
             n += 1;
             sum += h;
             sum2 += h * h;
@@ -142,18 +217,19 @@ pub fn rate(
 /// Direction (radians about z) of steepest descent of the least-squares plane through the
 /// valid cells of the neighbourhood; `None` if the slope is below `flat` (m/m).
 pub fn descent(
-    map: &HeightMap,
+    map: &impl Cells,
     ix: usize,
     iy: usize,
     neighbourhood: &[(isize, isize)],
     flat: f64,
 ) -> Option<f64> {
+    let cell = map.cell_size();
     // Normal equations of h = a + gx * dx + gy * dy, dx and dy in metres.
     let mut ata = Matrix3::<f64>::zeros();
     let mut atb = Vector3::<f64>::zeros();
     for &(dx, dy) in neighbourhood {
-        if let Some(h) = map.get(ix as isize + dx, iy as isize + dy) {
-            let row = Vector3::new(1.0, dx as f64 * map.cell, dy as f64 * map.cell);
+        if let Some(h) = map.height(ix as isize + dx, iy as isize + dy) {
+            let row = Vector3::new(1.0, dx as f64 * cell, dy as f64 * cell);
             ata += row * row.transpose();
             atb += row * h;
         }
@@ -197,7 +273,7 @@ impl SurfaceShape {
 /// the surface or invalid ones (a hole in the scan is not an edge), 4-connected, taken as
 /// a 2-D point set whose principal axes give its long axis and width.
 pub fn surface(
-    map: &HeightMap,
+    map: &impl Cells,
     ix: usize,
     iy: usize,
     neighbourhood: &[(isize, isize)],
@@ -206,7 +282,7 @@ pub fn surface(
 ) -> SurfaceShape {
     // Some(true): on the surface; Some(false): another height (an edge); None: no data.
     let on = |dx: isize, dy: isize| {
-        map.get(ix as isize + dx, iy as isize + dy)
+        map.height(ix as isize + dx, iy as isize + dy)
             .map(|h| (h - level).abs() <= tolerance)
     };
     let flat = SurfaceShape {
@@ -237,7 +313,7 @@ pub fn surface(
     let (mut n, mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     while let Some((dx, dy)) = stack.pop() {
         if on(dx, dy) == Some(true) {
-            let (x, y) = (dx as f64 * map.cell, dy as f64 * map.cell);
+            let (x, y) = (dx as f64 * map.cell_size(), dy as f64 * map.cell_size());
             n += 1.0;
             sx += x;
             sy += y;
@@ -268,7 +344,7 @@ pub fn surface(
         spread_across: across.sqrt(),
         // A cell at the edge holds the surface over half its width on average: one cell
         // less than the cells' own spread.
-        width: ((12.0 * across).sqrt() - map.cell).max(0.0),
+        width: ((12.0 * across).sqrt() - map.cell_size()).max(0.0),
     }
 }
 
@@ -309,16 +385,8 @@ mod tests {
 
     /// An `n` x `n` map of 5 cm cells with heights `f(ix, iy)`.
     fn map_of(n: usize, f: impl Fn(usize, usize) -> Option<f64>) -> HeightMap {
-        let (nx, ny) = (n, n);
-        let heights = (0..nx * ny).map(|i| f(i % nx, i / nx)).collect();
-        HeightMap {
-            x0: 0.0,
-            y0: 0.0,
-            cell: 0.05,
-            nx,
-            ny,
-            heights,
-        }
+        let heights: Vec<Option<f64>> = (0..n * n).map(|i| f(i % n, i / n)).collect();
+        HeightMap::from_dense(0.0, 0.0, 0.05, n, n, &heights)
     }
 
     #[test]
@@ -390,6 +458,66 @@ mod tests {
         );
     }
 
+    /// A band of rows answers as the map for every cell its template and neighbourhood
+    /// read: `rate` and `descent` on the band against the same on the map, bit for bit,
+    /// for every cell, on seeded maps (a dense one with holes and slopes, a tiled one
+    /// built from far-apart patches of points), bands filled as `hypotheses` fills them.
+    #[test]
+    fn bands_rate_as_the_map_does() {
+        use crate::cloud::PointCloud;
+        use crate::method::heightmap::HeightMapConfig;
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (nx, ny) = (23, 2 * BAND_ROWS + 9);
+        let dense: Vec<Option<f64>> = (0..nx * ny)
+            .map(|i| {
+                let slope = 0.45 + 0.01 * (i % nx) as f64 - 0.004 * (i / nx) as f64;
+                (rng.random_range(0.0..1.0) < 0.8).then(|| slope + rng.random_range(0.0..0.01))
+            })
+            .collect();
+        let mut pts = Vec::new();
+        for _ in 0..6 {
+            let (x0, y0) = (rng.random_range(-4.0..4.0), rng.random_range(-4.0..4.0));
+            let z = rng.random_range(0.3..0.6);
+            for k in 0..400 {
+                let (u, v) = ((k % 20) as f64 * 0.02, (k / 20) as f64 * 0.02);
+                pts.push(Point3::new(x0 + u, y0 + v, z + 0.1 * u));
+            }
+        }
+        let maps = [
+            HeightMap::from_dense(0.0, 0.0, 0.05, nx, ny, &dense),
+            HeightMap::from_cloud(&PointCloud::new(pts), &HeightMapConfig::default()),
+        ];
+        let r = rule_();
+        let height = r.height.map(|t| t.scaled(1.0));
+        let mut compared = 0;
+        for map in &maps {
+            for radius in [0.1, 0.2] {
+                let template = map.disc(radius);
+                let reach = template
+                    .iter()
+                    .map(|&(_, dy)| dy.unsigned_abs())
+                    .max()
+                    .unwrap();
+                let mut band = Band::default();
+                for iy in 0..map.ny {
+                    if !band.holds(iy, reach) {
+                        band.fill(map, iy, reach);
+                    }
+                    for ix in 0..map.nx {
+                        let want = rate(map, ix, iy, &template, height.as_ref(), &r);
+                        let got = rate(&band, ix, iy, &template, height.as_ref(), &r);
+                        assert_eq!(format!("{got:?}"), format!("{want:?}"), "{ix} {iy}");
+                        let want = descent(map, ix, iy, &template, 1e-3);
+                        let got = descent(&band, ix, iy, &template, 1e-3);
+                        assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits));
+                        compared += usize::from(want.is_some());
+                    }
+                }
+            }
+        }
+        assert!(compared > 1000, "{compared}");
+    }
     /// A strip `width` cells wide along the direction `deg` (degrees about z) through the
     /// centre of a 40 x 40 map at 0.45 m over a floor at 0; `hole(x, y)` cells invalid.
     fn strip(width: f64, deg: f64, hole: impl Fn(usize, usize) -> bool) -> HeightMap {
@@ -437,13 +565,13 @@ mod tests {
             "{holed:?} {whole:?}"
         );
         // A square top gives no axis.
-        let mut square = strip(40.0, 0.0, |_, _| false);
-        for (i, h) in square.heights.iter_mut().enumerate() {
-            let (x, y) = (i % 40, i / 40);
-            if !((12..29).contains(&x) && (12..29).contains(&y)) {
-                *h = Some(0.0);
-            }
-        }
+        let square = map_of(40, |x, y| {
+            Some(if (12..29).contains(&x) && (12..29).contains(&y) {
+                0.45
+            } else {
+                0.0
+            })
+        });
         assert_eq!(surface(&square, 20, 20, &disc, 0.45, 0.05).along(1.3), None);
     }
 

@@ -2,11 +2,9 @@
 //! poses within the agent radius of a stronger one are suppressed, and the points that
 //! afford each detection are grown from it.
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use nalgebra::Point3;
 
+use crate::cellhash::CellMap;
 use crate::cloud::PointCloud;
 use crate::num::to_i64;
 
@@ -56,8 +54,7 @@ pub fn segment(
             to_i64((p.z / cell).floor()),
         )
     };
-    let mut grid: HashMap<(i64, i64, i64), Vec<usize>, BuildHasherDefault<CellHasher>> =
-        HashMap::default();
+    let mut grid: CellMap<(i64, i64, i64), Vec<usize>> = CellMap::default();
     for (i, p) in cloud.points.iter().enumerate() {
         if p.z >= cfg.floor_height {
             grid.entry(key(p)).or_default().push(i);
@@ -112,33 +109,6 @@ pub fn segment(
         }
     }
     label
-}
-
-/// A multiplicative hasher for integer cell keys (the Fx hash of rustc): the grid is
-/// looked up 27 times per grown point, and SipHash's protection against chosen keys is of
-/// no use for cells of a point cloud. Only lookups depend on it, never an order.
-#[derive(Default)]
-struct CellHasher(u64);
-
-impl Hasher for CellHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for b in bytes {
-            self.write_u64(*b as u64);
-        }
-    }
-
-    fn write_i64(&mut self, i: i64) {
-        self.write_u64(i as u64);
-    }
-
-    fn write_u64(&mut self, i: u64) {
-        const K: u64 = 0x517c_c1b7_2722_0a95;
-        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(K);
-    }
 }
 
 #[cfg(test)]

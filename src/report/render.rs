@@ -396,17 +396,16 @@ pub fn heightmap_image(
     let (mw, mh) = (px(map.nx) * scale, px(map.ny) * scale);
     let mut img = Image::new(mw.max(LEGEND_MIN_WIDTH), mh + LEGEND_HEIGHT, BACKGROUND);
     let (lo, hi) = map
-        .heights
-        .iter()
-        .flatten()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &z| {
+        .valid_heights()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), z| {
             (l.min(z), h.max(z))
         });
     let span = if hi > lo { hi - lo } else { 1.0 };
     for iy in 0..map.ny {
         for ix in 0..map.nx {
-            let c =
-                map.heights[iy * map.nx + ix].map_or(INVALID_CELL, |z| viridis((z - lo) / span));
+            let c = map
+                .get(ix as isize, iy as isize)
+                .map_or(INVALID_CELL, |z| viridis((z - lo) / span));
             let py = (map.ny - 1 - iy) as i64 * scale as i64;
             img.fill_rect(ix as i64 * scale as i64, py, scale as i64, scale as i64, c);
         }
@@ -766,14 +765,14 @@ mod tests {
 
     fn map_3x2() -> HeightMap {
         // Row 0 (bottom): 0.0, 0.5, invalid; row 1 (top): 1.0, 0.2, 0.0.
-        HeightMap {
-            x0: 0.0,
-            y0: 0.0,
-            cell: 0.1,
-            nx: 3,
-            ny: 2,
-            heights: vec![Some(0.0), Some(0.5), None, Some(1.0), Some(0.2), Some(0.0)],
-        }
+        HeightMap::from_dense(
+            0.0,
+            0.0,
+            0.1,
+            3,
+            2,
+            &[Some(0.0), Some(0.5), None, Some(1.0), Some(0.2), Some(0.0)],
+        )
     }
 
     fn detection(affordances: &[&str], parts: Vec<Cylinder>) -> Detection {
@@ -826,11 +825,7 @@ mod tests {
         assert!(viridis(1.0)[0] > 200 && viridis(1.0)[1] > 200 && viridis(1.0)[2] < 80);
         assert!(viridis(0.0)[2] > viridis(0.0)[1]);
         // A wide map is as wide as its cells.
-        let wide = HeightMap {
-            nx: 40,
-            heights: vec![Some(0.3); 80],
-            ..m
-        };
+        let wide = HeightMap::from_dense(m.x0, m.y0, m.cell, 40, m.ny, &[Some(0.3); 80]);
         assert_eq!(
             heightmap_image(&wide, &[], &[], &Legend::default(), 8).width,
             320
@@ -843,14 +838,7 @@ mod tests {
 
     #[test]
     fn hypothesis_arrows_point_along_the_heading() {
-        let m = HeightMap {
-            x0: 0.0,
-            y0: 0.0,
-            cell: 0.1,
-            nx: 9,
-            ny: 9,
-            heights: vec![Some(0.0); 81],
-        };
+        let m = HeightMap::from_dense(0.0, 0.0, 0.1, 9, 9, &[Some(0.0); 81]);
         // Heading 0 (+x): red to the right of the centre (45, 45), not to the left.
         let img = heightmap_image(
             &m,
@@ -920,14 +908,7 @@ mod tests {
         let own = Legend::new(vec![("perching".into(), [1, 2, 3])]);
         assert_eq!(own.colour(&strs(&["perching"])), [1, 2, 3]);
         assert_eq!(own.colour(&strs(&["sitting"])), OTHER_AFFORDANCE);
-        let m = HeightMap {
-            x0: -0.5,
-            y0: -0.5,
-            cell: 0.05,
-            nx: 20,
-            ny: 20,
-            heights: vec![Some(0.0); 400],
-        };
+        let m = HeightMap::from_dense(-0.5, -0.5, 0.05, 20, 20, &[Some(0.0); 400]);
         let d = detection(&["sitting", "backrest"], vec![]);
         let img = heightmap_image(&m, &[], &[d], &legend, 10);
         // Seat at the world origin = pixel (100, 100); the heading arrow runs to +x.
