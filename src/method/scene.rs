@@ -192,6 +192,60 @@ impl Scene {
         (best - spacing / 2.0 - c.radius).min(floor)
     }
 
+    /// A lower bound on [`Self::clearance`]`(c)` from one read of the distance field, at
+    /// the cell of the axis midpoint: every cell the clearance samples is within `R + h` of
+    /// that cell's centre (`R` the farther axis end from it, `h` half a cell diagonal), and
+    /// the field is 1-Lipschitz between cell centres, so each sampled distance is at least
+    /// the midpoint's less `R + h`; the sample spacing is at most one voxel. `None` when
+    /// some sampled cell may lie outside the field's box (there the clearance is the
+    /// distance to the occupied box, which the field does not bound) or without a field.
+    fn clearance_bound(&self, c: &Cylinder) -> Option<f64> {
+        let field = self.field.as_ref()?;
+        let v = self.voxel;
+        let (la, lb) = (
+            (c.a.coords - self.origin) / v,
+            (c.b.coords - self.origin) / v,
+        );
+        let (ka, kb) = (cell_of(&la), cell_of(&lb));
+        for a in 0..3 {
+            // One cell more each way: a sample rounded across a cell boundary.
+            let lo = ka[a]
+                .min(kb[a])
+                .saturating_sub(1)
+                .saturating_sub(field.min[a]);
+            let hi = ka[a]
+                .max(kb[a])
+                .saturating_add(1)
+                .saturating_sub(field.min[a]);
+            if lo < 0 || usize::try_from(hi).map_or(true, |h| h >= field.dims[a]) {
+                return None;
+            }
+        }
+        let km = cell_of(&((la + lb) / 2.0));
+        let d = f64::from(field.get(km)?);
+        let centre = Vector3::new(km[0] as f64 + 0.5, km[1] as f64 + 0.5, km[2] as f64 + 0.5);
+        let reach = (la - centre)
+            .norm_squared()
+            .max((lb - centre).norm_squared())
+            .sqrt()
+            * v;
+        let half_diag = v * 3f64.sqrt() / 2.0;
+        // The sampled cell's centre is within half a diagonal of its sample (one), the
+        // clearance takes two more off the field (quantising and the voxel's extent).
+        let bound = d
+            - reach
+            - 3.0 * half_diag
+            - v / 2.0
+            - c.radius
+            - BOUND_SLACK * (1.0 + d.abs() + reach);
+        let floor = if self.floor {
+            floor_gap(c)
+        } else {
+            f64::INFINITY
+        };
+        Some(bound.min(floor))
+    }
+
     /// Exact test: does the body part `c` intersect an occupied voxel or the floor?
     ///
     /// The answer is parry3d's `intersection_test` of a cylinder against the `Voxels`
@@ -467,12 +521,26 @@ impl Scene {
         resolution: f64,
     ) -> Option<f64> {
         let mut parts = Vec::new();
-        let min_step = if speed > 0.0 { resolution / speed } else { 1.0 };
+        // Each part's bound on its clearance, ascending, with its index.
+        let mut order: Vec<(f64, usize)> = Vec::new();
         let mut touching = |t: f64, parts: &mut Vec<Cylinder>| -> (bool, f64) {
             motion(t, parts);
+            order.clear();
+            order.extend(parts.iter().enumerate().map(|(i, c)| {
+                let b = self.clearance_bound(c).filter(|b| !b.is_nan());
+                (b.unwrap_or(f64::NEG_INFINITY), i)
+            }));
+            order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
             let mut gap = f64::INFINITY;
             let mut hit = false;
-            for c in parts.iter() {
+            for &(bound, i) in order.iter() {
+                // This part and all after it have a positive clearance no smaller than
+                // the gap found: none touches or lowers the gap (the answer is the same
+                // as testing every part: whether any touches, else the least clearance).
+                if bound > 0.0 && bound >= gap {
+                    break;
+                }
+                let c = &parts[i];
                 let g = self.clearance(c);
                 gap = gap.min(g);
                 if g <= 0.0 && self.intersects(c) {
@@ -483,35 +551,48 @@ impl Scene {
             }
             (hit, gap)
         };
-        let (mut free, mut t) = (None::<f64>, 0.0f64);
-        loop {
-            let (hit, gap) = touching(t, &mut parts);
-            if hit {
-                let Some(mut lo) = free else {
-                    return Some(t);
-                };
-                let mut hi = t;
-                while (hi - lo) * speed > resolution / 4.0 {
-                    let mid = 0.5 * (lo + hi);
-                    if touching(mid, &mut parts).0 {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
-                }
-                return Some(hi);
-            }
-            free = Some(t);
-            if t >= 1.0 {
-                return None;
-            }
-            let step = if gap > 0.0 && speed > 0.0 {
-                (gap / speed).max(min_step)
-            } else {
-                min_step
+        advance(|t| touching(t, &mut parts), speed, resolution)
+    }
+}
+
+/// Conservative advancement and bisection: the first `t` in [0, 1] at which `touching(t)`
+/// (whether the motion touches at `t`, and otherwise a lower bound on its gap, metres)
+/// says it touches, steps of `gap / speed` (at least `resolution / speed`) through free
+/// space and bisection to `resolution / 4` of motion; `None` if it never touches.
+fn advance(
+    mut touching: impl FnMut(f64) -> (bool, f64),
+    speed: f64,
+    resolution: f64,
+) -> Option<f64> {
+    let min_step = if speed > 0.0 { resolution / speed } else { 1.0 };
+    let (mut free, mut t) = (None::<f64>, 0.0f64);
+    loop {
+        let (hit, gap) = touching(t);
+        if hit {
+            let Some(mut lo) = free else {
+                return Some(t);
             };
-            t = (t + step).min(1.0);
+            let mut hi = t;
+            while (hi - lo) * speed > resolution / 4.0 {
+                let mid = 0.5 * (lo + hi);
+                if touching(mid).0 {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            return Some(hi);
         }
+        free = Some(t);
+        if t >= 1.0 {
+            return None;
+        }
+        let step = if gap > 0.0 && speed > 0.0 {
+            (gap / speed).max(min_step)
+        } else {
+            min_step
+        };
+        t = (t + step).min(1.0);
     }
 }
 
@@ -519,6 +600,11 @@ impl Scene {
 /// to be decided without GJK: a thousand times the f32 rounding of room-sized coordinates,
 /// so only voxels that GJK itself would decide the same way are skipped.
 const DECIDE_MARGIN: f64 = 1e-3;
+
+/// Relative slack (of the distances involved) taken off bounds derived from the field's
+/// `f32` distances: eight times their rounding (2^-23 per operation), so a bound stays
+/// below the value it bounds as computed.
+const BOUND_SLACK: f64 = 1e-6;
 
 /// Voxels per edge of parry3d's `Voxels` chunks in 3D (`VoxelsChunk::VOXELS_PER_CHUNK_DIM`),
 /// whose union is the shape's `local_aabb`.
@@ -1645,5 +1731,126 @@ mod tests {
         assert!(!s.intersects(&vertical(0.0, 0.0, 0.1, 0.5, 0.05)));
         assert!((s.clearance(&vertical(0.0, 0.0, 0.1, 0.5, 0.05)) - 0.1).abs() < 1e-9);
         assert!((s.surface_distance(&Point3::new(0.0, 0.0, 0.3), 0.1) - 0.2).abs() < 1e-9);
+    }
+
+    /// A slab, a post and a wall (as in `field_guided_test_agrees_with_parry_alone`).
+    fn furnished(floor: bool) -> Scene {
+        let mut pts = slab(0.45).points;
+        for k in 0..80 {
+            pts.push(Point3::new(0.9, 0.2, k as f64 * 0.01));
+            for j in 0..60 {
+                pts.push(Point3::new(-0.3, j as f64 * 0.01, k as f64 * 0.01));
+            }
+        }
+        Scene::new(&PointCloud::new(pts), &cfg(floor))
+    }
+
+    /// A seeded uniform number in [0, 1).
+    fn uniform(state: &mut u64) -> f64 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    #[test]
+    fn clearance_bound_never_exceeds_the_clearance() {
+        for floor in [false, true] {
+            let s = furnished(floor);
+            let mut state = 99u64;
+            let mut next = || uniform(&mut state);
+            let (mut bounded, mut near) = (0, 0);
+            for _ in 0..20000 {
+                // Around and beyond the field's box (0.2 m past the voxels).
+                let a = Point3::new(next() * 2.4 - 0.8, next() * 1.4 - 0.4, next() * 1.4 - 0.2);
+                let d = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * next();
+                let c = Cylinder {
+                    joint: 0,
+                    a,
+                    b: a + d,
+                    radius: 0.01 + next() * 0.08,
+                };
+                let g = s.clearance(&c);
+                if let Some(b) = s.clearance_bound(&c) {
+                    assert!(b <= g, "bound {b} over clearance {g}: {c:?}");
+                    bounded += 1;
+                    near += usize::from(g - b < 0.1);
+                }
+            }
+            assert!(
+                bounded > 5000 && near > 1000,
+                "{bounded} bounded, {near} near"
+            );
+        }
+    }
+
+    /// [`Scene::first_contact`] as it was before the clearance bounds: every part's
+    /// clearance in order, the exact test where it is not positive.
+    fn first_contact_reference(
+        s: &Scene,
+        mut motion: impl FnMut(f64, &mut Vec<Cylinder>),
+        speed: f64,
+        resolution: f64,
+    ) -> Option<f64> {
+        let mut parts = Vec::new();
+        let touching = |t: f64| -> (bool, f64) {
+            motion(t, &mut parts);
+            let mut gap = f64::INFINITY;
+            for c in parts.iter() {
+                let g = s.clearance(c);
+                gap = gap.min(g);
+                if g <= 0.0 && s.intersects(c) {
+                    return (true, gap);
+                }
+            }
+            (false, gap)
+        };
+        advance(touching, speed, resolution)
+    }
+
+    #[test]
+    fn first_contact_equals_testing_every_part_bit_for_bit() {
+        for floor in [false, true] {
+            let s = furnished(floor);
+            let mut state = 7u64;
+            let mut next = || uniform(&mut state);
+            let (mut hits, mut misses) = (0, 0);
+            for _ in 0..300 {
+                // A body of 2 to 8 parts moved along a straight line from above the scene.
+                let n = 2 + to_usize(next() * 7.0);
+                let base = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, 0.5 + next());
+                let parts: Vec<Cylinder> = (0..n)
+                    .map(|j| {
+                        let a = base + Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.6;
+                        let d = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.6;
+                        Cylinder {
+                            joint: j,
+                            a,
+                            b: a + d,
+                            radius: 0.02 + next() * 0.08,
+                        }
+                    })
+                    .collect();
+                let dir = Vector3::new(next() - 0.5, next() - 0.5, -next() * 2.0);
+                let motion = |t: f64, out: &mut Vec<Cylinder>| {
+                    out.clear();
+                    out.extend(parts.iter().map(|c| Cylinder {
+                        a: c.a + dir * t,
+                        b: c.b + dir * t,
+                        ..*c
+                    }));
+                };
+                let speed = dir.norm();
+                let want = first_contact_reference(&s, motion, speed, 0.005);
+                let got = s.first_contact(motion, speed, 0.005);
+                assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits));
+                if want.is_some() {
+                    hits += 1;
+                } else {
+                    misses += 1;
+                }
+            }
+            assert!(hits > 50 && misses > 20, "{hits} hits, {misses} misses");
+        }
     }
 }
