@@ -172,31 +172,65 @@ impl Scene {
     /// A lower bound on the gap (metres) between the body part `c` and the scene (voxels and
     /// floor); positive means certainly free, zero or negative means contact is possible.
     pub fn clearance(&self, c: &Cylinder) -> f64 {
+        self.clearance_and_centres(c).0
+    }
+
+    /// [`Self::clearance`], and a lower bound on the distance (metres) from the axis of
+    /// `c` to the centre of any occupied voxel (`f64::NEG_INFINITY` when some sampled cell
+    /// is outside the field's box): each read sample's distance less its own offset from
+    /// its cell's centre, the samples skipped bounded from the sample that skipped them.
+    fn clearance_and_centres(&self, c: &Cylinder) -> (f64, f64) {
         let floor = if self.floor {
             floor_gap(c)
         } else {
             f64::INFINITY
         };
-        if self.field.is_none() {
-            return floor;
-        }
+        let Some(field) = &self.field else {
+            return (floor, f64::INFINITY);
+        };
         let axis = c.b - c.a;
         let len = axis.norm();
         let n = to_usize((len / self.voxel).ceil().max(1.0));
         let spacing = len / n as f64;
-        let sample = |i: usize| self.point_clearance(&(c.a + axis * (i as f64 / n as f64)));
+        let point = |i: usize| c.a + axis * (i as f64 / n as f64);
         let mut best = f64::INFINITY;
+        let mut centres = f64::NEG_INFINITY;
         if self.samples_in_field(c) {
+            let v = self.voxel;
+            let half_diag = v * 3f64.sqrt() / 2.0;
+            // `point_clearance` of sample `i`, and a lower bound on its distance to any
+            // occupied voxel centre.
+            let sample = |i: usize| {
+                let p = point(i);
+                let l = (p.coords - self.origin) / v;
+                let k = cell_of(&l);
+                match field.get(k) {
+                    Some(d) => {
+                        let centre =
+                            Vector3::new(k[0] as f64 + 0.5, k[1] as f64 + 0.5, k[2] as f64 + 0.5);
+                        let d = d as f64;
+                        (d - 2.0 * half_diag, d - (l - centre).norm() * v)
+                    }
+                    // Not reached (every sampled cell is in the box); the distance to
+                    // the occupied box bounds both.
+                    None => {
+                        let b = self.point_clearance(&p);
+                        (b, b)
+                    }
+                }
+            };
             // Both ends first, then the samples between, skipping those the field's
             // Lipschitz bound shows to be no nearer than the least found: sample `k`
             // reads a cell within `|k - i| spacing` plus two half diagonals of sample
             // `i`'s, so its value is at least `i`'s less that. The least is the same.
-            let half_diag = self.voxel * 3f64.sqrt() / 2.0;
-            best = sample(0).min(sample(n));
+            let ((b0, c0), (bn, cn)) = (sample(0), sample(n));
+            best = b0.min(bn);
+            let mut near = c0.min(cn);
             let mut i = 1;
             while i < n {
-                let here = sample(i);
+                let (here, centre) = sample(i);
                 best = best.min(here);
+                near = near.min(centre);
                 let room = here
                     - best
                     - 2.0 * half_diag
@@ -206,14 +240,20 @@ impl Scene {
                 } else {
                     0
                 };
+                if skip > 0 {
+                    // Distances to centres are 1-Lipschitz along the axis.
+                    near = near.min(centre - skip as f64 * spacing);
+                }
                 i += 1 + skip;
             }
+            // Every axis point is within half a spacing of a sample.
+            centres = near - spacing / 2.0 - BOUND_SLACK * (1.0 + near.abs() + len);
         } else {
             for i in 0..=n {
-                best = best.min(sample(i));
+                best = best.min(self.point_clearance(&point(i)));
             }
         }
-        (best - spacing / 2.0 - c.radius).min(floor)
+        ((best - spacing / 2.0 - c.radius).min(floor), centres)
     }
 
     /// Whether every cell [`Self::clearance`] samples along `c` is in the field's box.
@@ -277,20 +317,37 @@ impl Scene {
     /// geometry with a margin of [`DECIDE_MARGIN`]; only the voxels between are handed
     /// to parry's GJK, with the poses parry itself would use.
     pub fn intersects(&self, c: &Cylinder) -> bool {
+        self.intersects_near(c, f64::NEG_INFINITY)
+    }
+
+    /// [`Self::intersects`] given `centres`, a lower bound on the distance (metres) from
+    /// the axis of `c` to any occupied voxel centre ([`Self::clearance_and_centres`]):
+    /// when it exceeds the radius, half a voxel diagonal and [`DECIDE_MARGIN`], every
+    /// voxel is one the walk would find clear (false at once); when it exceeds half a
+    /// diagonal, no axis point lies in an occupied voxel (the look for one is skipped).
+    /// Both with [`F32_SLACK`] for the `f32` geometry the walk classifies with.
+    fn intersects_near(&self, c: &Cylinder, centres: f64) -> bool {
         if self.floor && floor_gap(c) < 0.0 {
             return true;
         }
         let (Some(local_aabb), Some(field)) = (&self.parry_aabb, &self.field) else {
             return false;
         };
+        let axis = c.b - c.a;
+        let len = axis.norm();
+        let extent = (c.a.coords - self.origin)
+            .amax()
+            .max((c.b.coords - self.origin).amax());
+        let half_diag = self.voxel * 3f64.sqrt() / 2.0 + F32_SLACK * (1.0 + extent + len);
+        if centres > c.radius + half_diag + DECIDE_MARGIN {
+            return false;
+        }
         let Some((pose, shape)) = self.parry_cylinder(c) else {
             return false;
         };
         // Certainly touching: an axis point, away from the ends and the surface by the
         // margin, lies in an occupied voxel (the cylinder holds a ball around it).
-        let axis = c.b - c.a;
-        let len = axis.norm();
-        if c.radius > DECIDE_MARGIN && len > 2.0 * DECIDE_MARGIN {
+        if centres <= half_diag && c.radius > DECIDE_MARGIN && len > 2.0 * DECIDE_MARGIN {
             let n = to_usize((len / self.voxel).ceil());
             let inner = len - 2.0 * DECIDE_MARGIN;
             for i in 0..=n {
@@ -562,9 +619,9 @@ impl Scene {
                     break;
                 }
                 let c = &parts[i];
-                let g = self.clearance(c);
+                let (g, centres) = self.clearance_and_centres(c);
                 gap = gap.min(g);
-                if g <= 0.0 && self.intersects(c) {
+                if g <= 0.0 && self.intersects_near(c, centres) {
                     // The gap is not used once a part touches: the rest need no test.
                     hit = true;
                     break;
@@ -626,6 +683,11 @@ const DECIDE_MARGIN: f64 = 1e-3;
 /// `f32` distances: eight times their rounding (2^-23 per operation), so a bound stays
 /// below the value it bounds as computed.
 const BOUND_SLACK: f64 = 1e-6;
+
+/// Slack (metres per metre of local coordinates and length) between the `f64` geometry of
+/// a body part and the `f32` cylinder and voxel centres [`Scene::intersects`] classifies:
+/// over a hundred times their rounding (2^-24 per operation).
+const F32_SLACK: f64 = 1e-5;
 
 /// Voxels per edge of parry3d's `Voxels` chunks in 3D (`VoxelsChunk::VOXELS_PER_CHUNK_DIM`),
 /// whose union is the shape's `local_aabb`.
@@ -1753,6 +1815,8 @@ mod tests {
             };
             let want = s.intersects_parry(&c);
             assert_eq!(s.intersects(&c), want, "{c:?}");
+            let centres = s.clearance_and_centres(&c).1;
+            assert_eq!(s.intersects_near(&c, centres), want, "{c:?}");
             if want {
                 hits += 1;
             } else {
@@ -1815,13 +1879,7 @@ mod tests {
             for _ in 0..20000 {
                 // Around and beyond the field's box (0.2 m past the voxels).
                 let a = Point3::new(next() * 2.4 - 0.8, next() * 1.4 - 0.4, next() * 1.4 - 0.2);
-                let d = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * next();
-                let c = Cylinder {
-                    joint: 0,
-                    a,
-                    b: a + d,
-                    radius: 0.01 + next() * 0.08,
-                };
+                let c = random_cylinder(&mut next, a);
                 let g = s.clearance(&c);
                 assert_eq!(g.to_bits(), clearance_reference(&s, &c).to_bits(), "{c:?}");
                 if let Some(b) = s.clearance_bound(&c) {
@@ -1859,6 +1917,63 @@ mod tests {
             (false, gap)
         };
         advance(touching, speed, resolution)
+    }
+
+    /// A cylinder from `a` of seeded direction, length (under 0.87 m) and radius.
+    fn random_cylinder(next: &mut impl FnMut() -> f64, a: Point3<f64>) -> Cylinder {
+        let d = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * next();
+        Cylinder {
+            joint: 0,
+            a,
+            b: a + d,
+            radius: 0.01 + next() * 0.08,
+        }
+    }
+
+    /// Distance (metres, world) from the segment `a`-`b` to point `p`.
+    fn segment_distance(a: Point3<f64>, b: Point3<f64>, p: Point3<f64>) -> f64 {
+        let d = b - a;
+        let t = if d.norm_squared() > 0.0 {
+            ((p - a).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (p - (a + d * t)).norm()
+    }
+
+    #[test]
+    fn centre_bound_is_below_the_nearest_voxel_centre() {
+        let s = furnished(false);
+        let field = s.field.as_ref().unwrap();
+        let mut centres = Vec::new();
+        let hi = [0, 1, 2].map(|a| field.min[a] + field.dims[a] as i64);
+        field.any_occupied(field.min, hi, |k| {
+            let l = Vector3::new(k[0] as f64 + 0.5, k[1] as f64 + 0.5, k[2] as f64 + 0.5);
+            centres.push(Point3::from(l * s.voxel + s.origin));
+            false
+        });
+        let mut state = 5u64;
+        let mut next = || uniform(&mut state);
+        let (mut bounded, mut decided) = (0, 0);
+        for _ in 0..3000 {
+            let a = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, next() * 0.9);
+            let c = random_cylinder(&mut next, a);
+            let bound = s.clearance_and_centres(&c).1;
+            if bound == f64::NEG_INFINITY {
+                continue;
+            }
+            let want = centres
+                .iter()
+                .map(|&p| segment_distance(c.a, c.b, p))
+                .fold(f64::INFINITY, f64::min);
+            assert!(bound <= want, "bound {bound} over {want}: {c:?}");
+            bounded += 1;
+            decided += usize::from(want - bound < 0.03);
+        }
+        assert!(
+            bounded > 1000 && decided > 300,
+            "{bounded} bounded, {decided} tight"
+        );
     }
 
     #[test]
