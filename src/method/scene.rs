@@ -604,8 +604,13 @@ impl Scene {
         let mut touching = |t: f64, parts: &mut Vec<Cylinder>| -> (bool, f64) {
             motion(t, parts);
             order.clear();
+            // A lone part is visited whatever its bound: no read for it.
+            let lone = parts.len() == 1;
             order.extend(parts.iter().enumerate().map(|(i, c)| {
-                let b = self.clearance_bound(c).filter(|b| !b.is_nan());
+                let b = (!lone)
+                    .then(|| self.clearance_bound(c))
+                    .flatten()
+                    .filter(|b| !b.is_nan());
                 (b.unwrap_or(f64::NEG_INFINITY), i)
             }));
             order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
