@@ -134,7 +134,7 @@ fn fit_headings(
         let (mut f, mut cache) = (Vec::new(), FkCache::default());
         let mut pose = |t: f64, out: &mut Vec<Cylinder>| {
             agent.forward_kinematics_cached(&at(start_z - t * drop), posture, &mut cache, &mut f);
-            *out = agent.cylinders(&f, |j| !unchecked.contains(&j));
+            agent.cylinders_into(&f, |j| !unchecked.contains(&j), out);
         };
         pose(0.0, &mut parts);
         if parts.iter().any(|c| scene.touches(c)) {

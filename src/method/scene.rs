@@ -172,24 +172,139 @@ impl Scene {
     /// A lower bound on the gap (metres) between the body part `c` and the scene (voxels and
     /// floor); positive means certainly free, zero or negative means contact is possible.
     pub fn clearance(&self, c: &Cylinder) -> f64 {
+        self.clearance_and_centres(c).0
+    }
+
+    /// [`Self::clearance`], and a lower bound on the distance (metres) from the axis of
+    /// `c` to the centre of any occupied voxel (`f64::NEG_INFINITY` when some sampled cell
+    /// is outside the field's box): each read sample's distance less its own offset from
+    /// its cell's centre, the samples skipped bounded from the sample that skipped them.
+    fn clearance_and_centres(&self, c: &Cylinder) -> (f64, f64) {
         let floor = if self.floor {
             floor_gap(c)
         } else {
             f64::INFINITY
         };
-        if self.field.is_none() {
-            return floor;
-        }
+        let Some(field) = &self.field else {
+            return (floor, f64::INFINITY);
+        };
         let axis = c.b - c.a;
         let len = axis.norm();
         let n = to_usize((len / self.voxel).ceil().max(1.0));
         let spacing = len / n as f64;
+        let point = |i: usize| c.a + axis * (i as f64 / n as f64);
         let mut best = f64::INFINITY;
-        for i in 0..=n {
-            let p = c.a + axis * (i as f64 / n as f64);
-            best = best.min(self.point_clearance(&p));
+        let mut centres = f64::NEG_INFINITY;
+        if self.samples_in_field(c) {
+            let v = self.voxel;
+            let half_diag = v * 3f64.sqrt() / 2.0;
+            // `point_clearance` of sample `i`, and a lower bound on its distance to any
+            // occupied voxel centre.
+            let sample = |i: usize| {
+                let p = point(i);
+                let l = (p.coords - self.origin) / v;
+                let k = cell_of(&l);
+                match field.get(k) {
+                    Some(d) => {
+                        let centre =
+                            Vector3::new(k[0] as f64 + 0.5, k[1] as f64 + 0.5, k[2] as f64 + 0.5);
+                        let d = d as f64;
+                        (d - 2.0 * half_diag, d - (l - centre).norm() * v)
+                    }
+                    // Not reached (every sampled cell is in the box); the distance to
+                    // the occupied box bounds both.
+                    None => {
+                        let b = self.point_clearance(&p);
+                        (b, b)
+                    }
+                }
+            };
+            // Both ends first, then the samples between, skipping those the field's
+            // Lipschitz bound shows to be no nearer than the least found: sample `k`
+            // reads a cell within `|k - i| spacing` plus two half diagonals of sample
+            // `i`'s, so its value is at least `i`'s less that. The least is the same.
+            let ((b0, c0), (bn, cn)) = (sample(0), sample(n));
+            best = b0.min(bn);
+            let mut near = c0.min(cn);
+            let mut i = 1;
+            while i < n {
+                let (here, centre) = sample(i);
+                best = best.min(here);
+                near = near.min(centre);
+                let room = here
+                    - best
+                    - 2.0 * half_diag
+                    - BOUND_SLACK * (1.0 + here.abs() + best.abs() + len);
+                let skip = if room > 0.0 && spacing > 0.0 {
+                    to_usize((room / spacing).floor()).min(n)
+                } else {
+                    0
+                };
+                if skip > 0 {
+                    // Distances to centres are 1-Lipschitz along the axis.
+                    near = near.min(centre - skip as f64 * spacing);
+                }
+                i += 1 + skip;
+            }
+            // Every axis point is within half a spacing of a sample.
+            centres = near - spacing / 2.0 - BOUND_SLACK * (1.0 + near.abs() + len);
+        } else {
+            for i in 0..=n {
+                best = best.min(self.point_clearance(&point(i)));
+            }
         }
-        (best - spacing / 2.0 - c.radius).min(floor)
+        ((best - spacing / 2.0 - c.radius).min(floor), centres)
+    }
+
+    /// Whether every cell [`Self::clearance`] samples along `c` is in the field's box.
+    fn samples_in_field(&self, c: &Cylinder) -> bool {
+        self.field.as_ref().is_some_and(|f| {
+            let v = self.voxel;
+            let cell = |p: &Point3<f64>| cell_of(&((p.coords - self.origin) / v));
+            f.holds_segment(cell(&c.a), cell(&c.b))
+        })
+    }
+
+    /// A lower bound on [`Self::clearance`]`(c)` from one read of the distance field, at
+    /// the cell of the axis midpoint: every cell the clearance samples is within `R + h` of
+    /// that cell's centre (`R` the farther axis end from it, `h` half a cell diagonal), and
+    /// the field is 1-Lipschitz between cell centres, so each sampled distance is at least
+    /// the midpoint's less `R + h`; the sample spacing is at most one voxel. `None` when
+    /// some sampled cell may lie outside the field's box (there the clearance is the
+    /// distance to the occupied box, which the field does not bound) or without a field.
+    fn clearance_bound(&self, c: &Cylinder) -> Option<f64> {
+        let field = self.field.as_ref()?;
+        let v = self.voxel;
+        let (la, lb) = (
+            (c.a.coords - self.origin) / v,
+            (c.b.coords - self.origin) / v,
+        );
+        if !field.holds_segment(cell_of(&la), cell_of(&lb)) {
+            return None;
+        }
+        let km = cell_of(&((la + lb) / 2.0));
+        let d = f64::from(field.get(km)?);
+        let centre = Vector3::new(km[0] as f64 + 0.5, km[1] as f64 + 0.5, km[2] as f64 + 0.5);
+        let reach = (la - centre)
+            .norm_squared()
+            .max((lb - centre).norm_squared())
+            .sqrt()
+            * v;
+        let half_diag = v * 3f64.sqrt() / 2.0;
+        // The sampled cell's centre is within half a diagonal of its sample (one), the
+        // clearance takes two more off the field (quantising and the voxel's extent).
+        let bound = d
+            - reach
+            - 3.0 * half_diag
+            - v / 2.0
+            - c.radius
+            - BOUND_SLACK * (1.0 + d.abs() + reach);
+        let floor = if self.floor {
+            floor_gap(c)
+        } else {
+            f64::INFINITY
+        };
+        Some(bound.min(floor))
     }
 
     /// Exact test: does the body part `c` intersect an occupied voxel or the floor?
@@ -202,20 +317,37 @@ impl Scene {
     /// geometry with a margin of [`DECIDE_MARGIN`]; only the voxels between are handed
     /// to parry's GJK, with the poses parry itself would use.
     pub fn intersects(&self, c: &Cylinder) -> bool {
+        self.intersects_near(c, f64::NEG_INFINITY)
+    }
+
+    /// [`Self::intersects`] given `centres`, a lower bound on the distance (metres) from
+    /// the axis of `c` to any occupied voxel centre ([`Self::clearance_and_centres`]):
+    /// when it exceeds the radius, half a voxel diagonal and [`DECIDE_MARGIN`], every
+    /// voxel is one the walk would find clear (false at once); when it exceeds half a
+    /// diagonal, no axis point lies in an occupied voxel (the look for one is skipped).
+    /// Both with [`F32_SLACK`] for the `f32` geometry the walk classifies with.
+    fn intersects_near(&self, c: &Cylinder, centres: f64) -> bool {
         if self.floor && floor_gap(c) < 0.0 {
             return true;
         }
         let (Some(local_aabb), Some(field)) = (&self.parry_aabb, &self.field) else {
             return false;
         };
+        let axis = c.b - c.a;
+        let len = axis.norm();
+        let extent = (c.a.coords - self.origin)
+            .amax()
+            .max((c.b.coords - self.origin).amax());
+        let half_diag = self.voxel * 3f64.sqrt() / 2.0 + F32_SLACK * (1.0 + extent + len);
+        if centres > c.radius + half_diag + DECIDE_MARGIN {
+            return false;
+        }
         let Some((pose, shape)) = self.parry_cylinder(c) else {
             return false;
         };
         // Certainly touching: an axis point, away from the ends and the surface by the
         // margin, lies in an occupied voxel (the cylinder holds a ball around it).
-        let axis = c.b - c.a;
-        let len = axis.norm();
-        if c.radius > DECIDE_MARGIN && len > 2.0 * DECIDE_MARGIN {
+        if centres <= half_diag && c.radius > DECIDE_MARGIN && len > 2.0 * DECIDE_MARGIN {
             let n = to_usize((len / self.voxel).ceil());
             let inner = len - 2.0 * DECIDE_MARGIN;
             for i in 0..=n {
@@ -467,15 +599,34 @@ impl Scene {
         resolution: f64,
     ) -> Option<f64> {
         let mut parts = Vec::new();
-        let min_step = if speed > 0.0 { resolution / speed } else { 1.0 };
+        // Each part's bound on its clearance, ascending, with its index.
+        let mut order: Vec<(f64, usize)> = Vec::new();
         let mut touching = |t: f64, parts: &mut Vec<Cylinder>| -> (bool, f64) {
             motion(t, parts);
+            order.clear();
+            // A lone part is visited whatever its bound: no read for it.
+            let lone = parts.len() == 1;
+            order.extend(parts.iter().enumerate().map(|(i, c)| {
+                let b = (!lone)
+                    .then(|| self.clearance_bound(c))
+                    .flatten()
+                    .filter(|b| !b.is_nan());
+                (b.unwrap_or(f64::NEG_INFINITY), i)
+            }));
+            order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
             let mut gap = f64::INFINITY;
             let mut hit = false;
-            for c in parts.iter() {
-                let g = self.clearance(c);
+            for &(bound, i) in order.iter() {
+                // This part and all after it have a positive clearance no smaller than
+                // the gap found: none touches or lowers the gap (the answer is the same
+                // as testing every part: whether any touches, else the least clearance).
+                if bound > 0.0 && bound >= gap {
+                    break;
+                }
+                let c = &parts[i];
+                let (g, centres) = self.clearance_and_centres(c);
                 gap = gap.min(g);
-                if g <= 0.0 && self.intersects(c) {
+                if g <= 0.0 && self.intersects_near(c, centres) {
                     // The gap is not used once a part touches: the rest need no test.
                     hit = true;
                     break;
@@ -483,35 +634,48 @@ impl Scene {
             }
             (hit, gap)
         };
-        let (mut free, mut t) = (None::<f64>, 0.0f64);
-        loop {
-            let (hit, gap) = touching(t, &mut parts);
-            if hit {
-                let Some(mut lo) = free else {
-                    return Some(t);
-                };
-                let mut hi = t;
-                while (hi - lo) * speed > resolution / 4.0 {
-                    let mid = 0.5 * (lo + hi);
-                    if touching(mid, &mut parts).0 {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
-                }
-                return Some(hi);
-            }
-            free = Some(t);
-            if t >= 1.0 {
-                return None;
-            }
-            let step = if gap > 0.0 && speed > 0.0 {
-                (gap / speed).max(min_step)
-            } else {
-                min_step
+        advance(|t| touching(t, &mut parts), speed, resolution)
+    }
+}
+
+/// Conservative advancement and bisection: the first `t` in [0, 1] at which `touching(t)`
+/// (whether the motion touches at `t`, and otherwise a lower bound on its gap, metres)
+/// says it touches, steps of `gap / speed` (at least `resolution / speed`) through free
+/// space and bisection to `resolution / 4` of motion; `None` if it never touches.
+fn advance(
+    mut touching: impl FnMut(f64) -> (bool, f64),
+    speed: f64,
+    resolution: f64,
+) -> Option<f64> {
+    let min_step = if speed > 0.0 { resolution / speed } else { 1.0 };
+    let (mut free, mut t) = (None::<f64>, 0.0f64);
+    loop {
+        let (hit, gap) = touching(t);
+        if hit {
+            let Some(mut lo) = free else {
+                return Some(t);
             };
-            t = (t + step).min(1.0);
+            let mut hi = t;
+            while (hi - lo) * speed > resolution / 4.0 {
+                let mid = 0.5 * (lo + hi);
+                if touching(mid).0 {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            return Some(hi);
         }
+        free = Some(t);
+        if t >= 1.0 {
+            return None;
+        }
+        let step = if gap > 0.0 && speed > 0.0 {
+            (gap / speed).max(min_step)
+        } else {
+            min_step
+        };
+        t = (t + step).min(1.0);
     }
 }
 
@@ -519,6 +683,16 @@ impl Scene {
 /// to be decided without GJK: a thousand times the f32 rounding of room-sized coordinates,
 /// so only voxels that GJK itself would decide the same way are skipped.
 const DECIDE_MARGIN: f64 = 1e-3;
+
+/// Relative slack (of the distances involved) taken off bounds derived from the field's
+/// `f32` distances: eight times their rounding (2^-23 per operation), so a bound stays
+/// below the value it bounds as computed.
+const BOUND_SLACK: f64 = 1e-6;
+
+/// Slack (metres per metre of local coordinates and length) between the `f64` geometry of
+/// a body part and the `f32` cylinder and voxel centres [`Scene::intersects`] classifies:
+/// over a hundred times their rounding (2^-24 per operation).
+const F32_SLACK: f64 = 1e-5;
 
 /// Voxels per edge of parry3d's `Voxels` chunks in 3D (`VoxelsChunk::VOXELS_PER_CHUNK_DIM`),
 /// whose union is the shape's `local_aabb`.
@@ -738,6 +912,22 @@ impl DistanceField {
             kept: AtomicUsize::new(0),
             dense,
         }
+    }
+
+    /// Whether every cell a point of the segment between the cells `ka` and `kb` falls
+    /// in (each axis between theirs, one cell more each way for rounding) is in the box.
+    fn holds_segment(&self, ka: [i64; 3], kb: [i64; 3]) -> bool {
+        (0..3).all(|a| {
+            let lo = ka[a]
+                .min(kb[a])
+                .saturating_sub(1)
+                .saturating_sub(self.min[a]);
+            let hi = ka[a]
+                .max(kb[a])
+                .saturating_add(1)
+                .saturating_sub(self.min[a]);
+            lo >= 0 && usize::try_from(hi).is_ok_and(|h| h < self.dims[a])
+        })
     }
 
     /// Offsets of grid key `k` in the box, or `None` outside it.
@@ -1630,6 +1820,8 @@ mod tests {
             };
             let want = s.intersects_parry(&c);
             assert_eq!(s.intersects(&c), want, "{c:?}");
+            let centres = s.clearance_and_centres(&c).1;
+            assert_eq!(s.intersects_near(&c, centres), want, "{c:?}");
             if want {
                 hits += 1;
             } else {
@@ -1645,5 +1837,193 @@ mod tests {
         assert!(!s.intersects(&vertical(0.0, 0.0, 0.1, 0.5, 0.05)));
         assert!((s.clearance(&vertical(0.0, 0.0, 0.1, 0.5, 0.05)) - 0.1).abs() < 1e-9);
         assert!((s.surface_distance(&Point3::new(0.0, 0.0, 0.3), 0.1) - 0.2).abs() < 1e-9);
+    }
+
+    /// A slab, a post and a wall (as in `field_guided_test_agrees_with_parry_alone`).
+    fn furnished(floor: bool) -> Scene {
+        let mut pts = slab(0.45).points;
+        for k in 0..80 {
+            pts.push(Point3::new(0.9, 0.2, k as f64 * 0.01));
+            for j in 0..60 {
+                pts.push(Point3::new(-0.3, j as f64 * 0.01, k as f64 * 0.01));
+            }
+        }
+        Scene::new(&PointCloud::new(pts), &cfg(floor))
+    }
+
+    /// A seeded uniform number in [0, 1).
+    fn uniform(state: &mut u64) -> f64 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// [`Scene::clearance`] reading every sample, as before the Lipschitz skips.
+    fn clearance_reference(s: &Scene, c: &Cylinder) -> f64 {
+        let floor = if s.floor { floor_gap(c) } else { f64::INFINITY };
+        if s.field.is_none() {
+            return floor;
+        }
+        let axis = c.b - c.a;
+        let len = axis.norm();
+        let n = to_usize((len / s.voxel).ceil().max(1.0));
+        let best = (0..=n)
+            .map(|i| s.point_clearance(&(c.a + axis * (i as f64 / n as f64))))
+            .fold(f64::INFINITY, f64::min);
+        (best - len / n as f64 / 2.0 - c.radius).min(floor)
+    }
+
+    #[test]
+    fn clearance_skips_no_nearest_sample_and_its_bound_stays_below() {
+        for floor in [false, true] {
+            let s = furnished(floor);
+            let mut state = 99u64;
+            let mut next = || uniform(&mut state);
+            let (mut bounded, mut near) = (0, 0);
+            for _ in 0..20000 {
+                // Around and beyond the field's box (0.2 m past the voxels).
+                let a = Point3::new(next() * 2.4 - 0.8, next() * 1.4 - 0.4, next() * 1.4 - 0.2);
+                let c = random_cylinder(&mut next, a);
+                let g = s.clearance(&c);
+                assert_eq!(g.to_bits(), clearance_reference(&s, &c).to_bits(), "{c:?}");
+                if let Some(b) = s.clearance_bound(&c) {
+                    assert!(b <= g, "bound {b} over clearance {g}: {c:?}");
+                    bounded += 1;
+                    near += usize::from(g - b < 0.1);
+                }
+            }
+            assert!(
+                bounded > 5000 && near > 1000,
+                "{bounded} bounded, {near} near"
+            );
+        }
+    }
+
+    /// [`Scene::first_contact`] as it was before the clearance bounds: every part's
+    /// clearance in order, the exact test where it is not positive.
+    fn first_contact_reference(
+        s: &Scene,
+        mut motion: impl FnMut(f64, &mut Vec<Cylinder>),
+        speed: f64,
+        resolution: f64,
+    ) -> Option<f64> {
+        let mut parts = Vec::new();
+        let touching = |t: f64| -> (bool, f64) {
+            motion(t, &mut parts);
+            let mut gap = f64::INFINITY;
+            for c in parts.iter() {
+                let g = s.clearance(c);
+                gap = gap.min(g);
+                if g <= 0.0 && s.intersects(c) {
+                    return (true, gap);
+                }
+            }
+            (false, gap)
+        };
+        advance(touching, speed, resolution)
+    }
+
+    /// A cylinder from `a` of seeded direction, length (under 0.87 m) and radius.
+    fn random_cylinder(next: &mut impl FnMut() -> f64, a: Point3<f64>) -> Cylinder {
+        let d = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * next();
+        Cylinder {
+            joint: 0,
+            a,
+            b: a + d,
+            radius: 0.01 + next() * 0.08,
+        }
+    }
+
+    /// Distance (metres, world) from the segment `a`-`b` to point `p`.
+    fn segment_distance(a: Point3<f64>, b: Point3<f64>, p: Point3<f64>) -> f64 {
+        let d = b - a;
+        let t = if d.norm_squared() > 0.0 {
+            ((p - a).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (p - (a + d * t)).norm()
+    }
+
+    #[test]
+    fn centre_bound_is_below_the_nearest_voxel_centre() {
+        let s = furnished(false);
+        let field = s.field.as_ref().unwrap();
+        let mut centres = Vec::new();
+        let hi = [0, 1, 2].map(|a| field.min[a] + field.dims[a] as i64);
+        field.any_occupied(field.min, hi, |k| {
+            let l = Vector3::new(k[0] as f64 + 0.5, k[1] as f64 + 0.5, k[2] as f64 + 0.5);
+            centres.push(Point3::from(l * s.voxel + s.origin));
+            false
+        });
+        let mut state = 5u64;
+        let mut next = || uniform(&mut state);
+        let (mut bounded, mut decided) = (0, 0);
+        for _ in 0..3000 {
+            let a = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, next() * 0.9);
+            let c = random_cylinder(&mut next, a);
+            let bound = s.clearance_and_centres(&c).1;
+            if bound == f64::NEG_INFINITY {
+                continue;
+            }
+            let want = centres
+                .iter()
+                .map(|&p| segment_distance(c.a, c.b, p))
+                .fold(f64::INFINITY, f64::min);
+            assert!(bound <= want, "bound {bound} over {want}: {c:?}");
+            bounded += 1;
+            decided += usize::from(want - bound < 0.03);
+        }
+        assert!(
+            bounded > 1000 && decided > 300,
+            "{bounded} bounded, {decided} tight"
+        );
+    }
+
+    #[test]
+    fn first_contact_equals_testing_every_part_bit_for_bit() {
+        for floor in [false, true] {
+            let s = furnished(floor);
+            let mut state = 7u64;
+            let mut next = || uniform(&mut state);
+            let (mut hits, mut misses) = (0, 0);
+            for _ in 0..300 {
+                // A body of 2 to 8 parts moved along a straight line from above the scene.
+                let n = 2 + to_usize(next() * 7.0);
+                let base = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, 0.5 + next());
+                let parts: Vec<Cylinder> = (0..n)
+                    .map(|j| {
+                        let a = base + Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.6;
+                        let d = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.6;
+                        Cylinder {
+                            joint: j,
+                            a,
+                            b: a + d,
+                            radius: 0.02 + next() * 0.08,
+                        }
+                    })
+                    .collect();
+                let dir = Vector3::new(next() - 0.5, next() - 0.5, -next() * 2.0);
+                let motion = |t: f64, out: &mut Vec<Cylinder>| {
+                    out.clear();
+                    out.extend(parts.iter().map(|c| Cylinder {
+                        a: c.a + dir * t,
+                        b: c.b + dir * t,
+                        ..*c
+                    }));
+                };
+                let speed = dir.norm();
+                let want = first_contact_reference(&s, motion, speed, 0.005);
+                let got = s.first_contact(motion, speed, 0.005);
+                assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits));
+                if want.is_some() {
+                    hits += 1;
+                } else {
+                    misses += 1;
+                }
+            }
+            assert!(hits > 50 && misses > 20, "{hits} hits, {misses} misses");
+        }
     }
 }

@@ -395,7 +395,7 @@ impl NodeContext<'_> {
         let mut motion = |t: f64, out: &mut Vec<Cylinder>| {
             self.at(branch, t, &mut p);
             agent.forward_kinematics_cached(self.place, &p, &mut cache, &mut frames);
-            *out = agent.cylinders(&frames, |j| links.contains(&j));
+            agent.cylinders_into(&frames, |j| links.contains(&j), out);
             for c in out.iter_mut() {
                 if let Some(k) = node.links.iter().position(|&l| l == c.joint) {
                     *c = c.span(node.spans[k]);

@@ -550,19 +550,34 @@ impl Agent {
         frames: &[Isometry3<f64>],
         which: impl Fn(usize) -> bool,
     ) -> Vec<Cylinder> {
-        self.joints
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| which(*i))
-            .filter_map(|(i, j)| {
-                j.link.as_ref().map(|l| Cylinder {
-                    joint: i,
-                    a: frames[i] * l.from,
-                    b: frames[i] * l.to,
-                    radius: l.radius,
-                })
-            })
-            .collect()
+        let mut out = Vec::new();
+        self.cylinders_into(frames, which, &mut out);
+        out
+    }
+
+    /// [`Self::cylinders`] written into `out` (cleared first), reusing its memory: for
+    /// the motions that pose the parts at every step.
+    pub fn cylinders_into(
+        &self,
+        frames: &[Isometry3<f64>],
+        which: impl Fn(usize) -> bool,
+        out: &mut Vec<Cylinder>,
+    ) {
+        out.clear();
+        out.extend(
+            self.joints
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| which(*i))
+                .filter_map(|(i, j)| {
+                    j.link.as_ref().map(|l| Cylinder {
+                        joint: i,
+                        a: frames[i] * l.from,
+                        b: frames[i] * l.to,
+                        radius: l.radius,
+                    })
+                }),
+        );
     }
 
     /// Largest distance (metres) from any point of the subtree of joint `j` to that joint's
