@@ -36,7 +36,9 @@ pub fn hypotheses(
 ) -> Vec<Hypothesis> {
     let template = map.disc(rule_.template_diameter * body_height / 2.0);
     let neighbourhood = map.disc(rule_.gradient_radius * body_height);
-    let surface_rule = rule_.surface.map(|a| (a, map.disc(a.radius * body_height)));
+    let surface_rule = rule_
+        .surface
+        .map(|sr| (sr, map.disc(sr.radius * body_height)));
     let height = rule_.height.map(|t| t.scaled(body_height));
     // Only every `step`-th cell in x and y is tried (grid-aligned, so deterministic).
     let step = rule_
@@ -75,9 +77,9 @@ pub fn hypotheses(
             // The surface reaches further than the band's rows: read from the map.
             let shape = surface_rule
                 .as_ref()
-                .map(|(a, disc)| (a, surface(map, ix, iy, disc, mean, a.tolerance)));
-            if let Some((a, shape)) = &shape {
-                if shape.width < a.min_width * body_height {
+                .map(|(sr, disc)| (sr, surface(map, ix, iy, disc, mean, sr.tolerance)));
+            if let Some((sr, shape)) = &shape {
+                if shape.width < sr.min_width * body_height {
                     continue;
                 }
             }
@@ -86,7 +88,7 @@ pub fn hypotheses(
             let across =
                 descent(&band, ix, iy, &neighbourhood, rule_.flat_gradient).or_else(|| {
                     shape
-                        .and_then(|(a, shape)| shape.along(a.elongation))
+                        .and_then(|(sr, shape)| shape.along(sr.elongation))
                         .map(|along| along + std::f64::consts::FRAC_PI_2)
                 });
             let heading = across.map(|d| match orientation {
@@ -243,7 +245,7 @@ pub fn descent(
 }
 
 /// The shape of the flat surface round a place: its long axis and its width across it.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SurfaceShape {
     /// Direction of the long axis, radians about z in `[0, pi)`.
     pub axis: f64,
@@ -285,14 +287,8 @@ pub fn surface(
         map.height(ix as isize + dx, iy as isize + dy)
             .map(|h| (h - level).abs() <= tolerance)
     };
-    let flat = SurfaceShape {
-        axis: 0.0,
-        spread_along: 0.0,
-        spread_across: 0.0,
-        width: 0.0,
-    };
     if on(0, 0) != Some(true) {
-        return flat;
+        return SurfaceShape::default();
     }
     // Offsets as indices of a (2r + 1)^2 square: which are in the neighbourhood, which
     // were reached.
