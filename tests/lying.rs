@@ -119,6 +119,7 @@ fn unfolded_in(c: &PointCloud, height: f64, x: f64) -> Vec<String> {
         top,
         availability: 1.0,
         heading: Some(0.0),
+        facing: None,
         memberships: [1.0; 3],
     };
     let fits = fit(&agent, &h, &prepared.scene, &hyp, &cfg.contact);

@@ -29,19 +29,28 @@ pub struct ContactConfig {
     pub resolution: f64,
 }
 
-/// Headings (radians) to try at a hypothesis: the offsets of the hierarchy around its
-/// heading, or every `fallback_yaw_step` when it has none.
+/// Headings (radians) to try at a hypothesis, in order: the offsets of the hierarchy
+/// around its heading, or, when it has none, every `fallback_yaw_step` round from the
+/// heading facing away from the highest neighbour ([`Hypothesis::facing`]; world +x only
+/// where nothing rises round the place).
 pub fn headings(h: &Hierarchy, hyp: &Hypothesis) -> Vec<f64> {
     match hyp.heading {
         Some(yaw) => h.fit.yaw_offsets.iter().map(|o| yaw + o).collect(),
-        None => all_round(h.fit.fallback_yaw_step),
+        None => all_round(hyp.facing.unwrap_or(0.0), h.fit.fallback_yaw_step),
     }
 }
 
-fn all_round(step: f64) -> Vec<f64> {
+/// Headings `step` apart all round, nearest to `from` first: `from`, then one step either
+/// side (counter-clockwise first), two steps, and so on.
+fn all_round(from: f64, step: f64) -> Vec<f64> {
     let n = to_usize((std::f64::consts::TAU / step).round().max(1.0));
+    let unit = std::f64::consts::TAU / n as f64;
     (0..n)
-        .map(|i| i as f64 * std::f64::consts::TAU / n as f64)
+        .map(|i| {
+            let k = i.div_ceil(2) as f64;
+            let side = if i % 2 == 1 { 1.0 } else { -1.0 };
+            from + side * k * unit
+        })
         .collect()
 }
 
@@ -69,7 +78,8 @@ pub fn fit(
 }
 
 /// [`fit`] with the links `unchecked` left out of the collision tests: the headings
-/// around the hypothesis heading, then all round if none of them was free.
+/// around the hypothesis heading, then all round, from [`Hypothesis::facing`], if none of
+/// them was free.
 fn fit_checking(
     agent: &Agent,
     h: &Hierarchy,
@@ -84,10 +94,13 @@ fn fit_checking(
         return fits;
     }
     let tried = first;
-    let rest: Vec<f64> = all_round(h.fit.fallback_yaw_step)
-        .into_iter()
-        .filter(|y| tried.iter().all(|t| angle_between(*t, *y) > 1e-6))
-        .collect();
+    let rest: Vec<f64> = all_round(
+        hyp.facing.or(hyp.heading).unwrap_or(0.0),
+        h.fit.fallback_yaw_step,
+    )
+    .into_iter()
+    .filter(|y| tried.iter().all(|t| angle_between(*t, *y) > 1e-6))
+    .collect();
     fit_headings(agent, h, scene, hyp, &rest, contact, unchecked).0
 }
 
@@ -247,6 +260,19 @@ mod tests {
     }
 
     #[test]
+    fn all_round_headings_start_at_the_given_one_nearest_first() {
+        let deg: Vec<f64> = all_round(0.5, 30f64.to_radians())
+            .iter()
+            .map(|y| (y - 0.5).to_degrees().round())
+            .collect();
+        assert_eq!(
+            deg,
+            [0., 30., -30., 60., -60., 90., -90., 120., -120., 150., -150., 180.]
+        );
+        assert_eq!(all_round(1.0, 7.0), [1.0]);
+    }
+
+    #[test]
     fn the_agent_is_lowered_onto_the_seat() {
         let (a, h) = models();
         let s = seat();
@@ -256,6 +282,7 @@ mod tests {
             top: 0.45,
             availability: 1.0,
             heading: Some(0.0),
+            facing: None,
             memberships: [1.0; 3],
         };
         let fits = fit(&a, &h, &s, &hyp, &ContactConfig { resolution: 0.005 });

@@ -22,6 +22,13 @@ pub struct Hypothesis {
     /// Heading (radians about z, 0 = +x) from the gradient descent; `None` where the
     /// neighbourhood is flat and no heading is preferred.
     pub heading: Option<f64>,
+    /// The heading facing away from the top of the tallest thing near the place (a chair's
+    /// back rather than the table it stands at, whose larger top can turn the plane fit's
+    /// descent round): where the gradient gives no heading, or none of the headings round
+    /// it is free, the all-round search of the fitting starts here, so that its order, and
+    /// with it the pose kept among equally stable ones, follows the scene and not the frame
+    /// (section 4.2). `None` where nothing rises above the place.
+    pub facing: Option<f64>,
     /// The three memberships: discontinuity low, roughness low, height comfortable.
     pub memberships: [f64; 3],
 }
@@ -40,6 +47,7 @@ pub fn hypotheses(
         .surface
         .map(|sr| (sr, map.disc(sr.radius * body_height)));
     let height = rule_.height.map(|t| t.scaled(body_height));
+    let facing_tolerance = rule_.facing_tolerance.unwrap_or(0.0);
     // Only every `step`-th cell in x and y is tried (grid-aligned, so deterministic).
     let step = rule_
         .spacing
@@ -91,10 +99,13 @@ pub fn hypotheses(
                         .and_then(|(sr, shape)| shape.along(sr.elongation))
                         .map(|along| along + std::f64::consts::FRAC_PI_2)
                 });
-            let heading = across.map(|d| match orientation {
+            let turn = |d: f64| match orientation {
                 Orientation::Parallel => d,
                 Orientation::Orthogonal => d + std::f64::consts::FRAC_PI_2,
-            });
+            };
+            let heading = across.map(turn);
+            let facing =
+                away_from_highest(&band, ix, iy, &neighbourhood, mean, facing_tolerance).map(turn);
             let (x, y) = map.centre(ix, iy);
             out.push(Hypothesis {
                 cell: (ix, iy),
@@ -102,6 +113,7 @@ pub fn hypotheses(
                 top,
                 availability: verdict.value,
                 heading,
+                facing,
                 memberships,
             });
         }
@@ -244,6 +256,38 @@ pub fn descent(
     Some((-gy).atan2(-gx))
 }
 
+/// Direction (radians about z) from the top of the tallest thing near cell `(ix, iy)`
+/// towards the cell: from the centroid of the cells of the neighbourhood (cell offsets)
+/// within `tolerance` metres of its highest valid cell. A flat top (a chair's back, a
+/// headboard) is taken whole, so which of its cells the scan's noise made highest does not
+/// turn the direction. `None` if no cell rises above `level` (metres) or the centroid is
+/// the cell itself (a top all round it).
+pub fn away_from_highest(
+    map: &impl Cells,
+    ix: usize,
+    iy: usize,
+    neighbourhood: &[(isize, isize)],
+    level: f64,
+    tolerance: f64,
+) -> Option<f64> {
+    let at = |&(dx, dy): &(isize, isize)| map.height(ix as isize + dx, iy as isize + dy);
+    let highest = neighbourhood
+        .iter()
+        .filter_map(at)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if highest <= level {
+        return None;
+    }
+    let (mut sx, mut sy) = (0isize, 0isize);
+    for o in neighbourhood {
+        if at(o).is_some_and(|h| h >= highest - tolerance) {
+            sx += o.0;
+            sy += o.1;
+        }
+    }
+    (sx != 0 || sy != 0).then(|| (-sy as f64).atan2(-sx as f64))
+}
+
 /// The shape of the flat surface round a place: its long axis and its width across it.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SurfaceShape {
@@ -355,6 +399,7 @@ mod tests {
             template_diameter: 0.1,
             gradient_radius: 0.1,
             flat_gradient: 0.05,
+            facing_tolerance: None,
             discontinuity: Low {
                 full: 0.1,
                 zero: 0.4,
@@ -452,6 +497,34 @@ mod tests {
             (d + std::f64::consts::FRAC_PI_2).abs() < 1e-9,
             "heading {d}"
         );
+    }
+
+    #[test]
+    fn facing_turns_away_from_the_tallest_top_not_the_largest() {
+        // A seat at 0.45 m round cell (10, 10); a chair back one cell deep at x = 5 and
+        // 0.85 m, with noise of 1 cm that makes one of its end cells the highest; a table
+        // top at 0.73 m over x >= 13, far larger within the neighbourhood (8 cells).
+        let m = map(|x, y| {
+            Some(match x {
+                5 if y == 7 => 0.86,
+                5 => 0.85,
+                13.. => 0.73,
+                _ => 0.45,
+            })
+        });
+        let disc = m.disc(0.4);
+        // The plane fit's descent faces the back (the table outweighs it) ...
+        let d = descent(&m, 10, 10, &disc, 0.05).unwrap();
+        assert!(d.cos() < -0.9, "descent {}", d.to_degrees());
+        // ... the top of the back, taken whole, faces the table (+x).
+        let f = away_from_highest(&m, 10, 10, &disc, 0.45, 0.05).unwrap();
+        assert!(f.abs() < 0.05, "facing {}", f.to_degrees());
+        // The highest cell alone would turn it by the noise.
+        let f0 = away_from_highest(&m, 10, 10, &disc, 0.45, 0.0).unwrap();
+        assert!(f0.abs() > 0.3, "facing {}", f0.to_degrees());
+        // Nothing above the place: no facing.
+        let flat = map(|_, _| Some(0.45));
+        assert_eq!(away_from_highest(&flat, 10, 10, &disc, 0.45, 0.05), None);
     }
 
     /// A band of rows answers as the map for every cell its template and neighbourhood

@@ -35,6 +35,12 @@ pub struct HypothesisRule {
     pub gradient_radius: f64,
     /// Slope (m/m) below which the gradient gives no heading and every heading is tried.
     pub flat_gradient: f64,
+    /// Where the gradient gives no heading, the search of every heading starts facing away
+    /// from the top of the tallest thing near the place: the cells of the gradient
+    /// neighbourhood within this height (metres) of its highest (an extension: the order
+    /// then follows the scene, not the frame); absent: the highest cells only.
+    #[serde(default)]
+    pub facing_tolerance: Option<f64>,
     /// "Discontinuity is low": share of invalid cells under the template.
     pub discontinuity: Low,
     /// "Roughness is low": standard deviation of heights under the template, metres.
@@ -743,6 +749,11 @@ fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
             &score.key("support_angle"),
             format!("must be 0-180 degrees, not {}", s.support_angle),
         ));
+    }
+    if let Some(v) = h.facing_tolerance {
+        if !NonNegative.holds(v) {
+            return Err(src.invalid(&hyp.key("facing_tolerance"), NonNegative.what(v)));
+        }
     }
     if let Some(v) = h.spacing {
         if !Positive.holds(v) {
@@ -1466,6 +1477,16 @@ mod tests {
                 what,
             );
         }
+    }
+
+    #[test]
+    fn a_negative_facing_tolerance_is_named() {
+        assert_eq!(
+            load(BUILTIN_SITTING).unwrap().hypothesis.facing_tolerance,
+            Some(0.05)
+        );
+        let (e, line) = edited("facing_tolerance = 0.05", "facing_tolerance = -0.05");
+        names(&e, line, "hypothesis.facing_tolerance", "-0.05");
     }
 
     #[test]

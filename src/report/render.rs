@@ -803,6 +803,7 @@ mod tests {
             top: 0.5,
             availability: 1.0,
             heading,
+            facing: None,
             memberships: [1.0; 3],
         }
     }
