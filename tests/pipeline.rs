@@ -113,6 +113,25 @@ fn a_sofa_affords_armrests_at_its_ends() {
 }
 
 #[test]
+fn the_samples_chair_at_its_table_gets_no_armrest_from_the_table_edge() {
+    // In the committed sample the chair stands in front of the table (seat at x = 1.35 m,
+    // y = 0): the forearm came down onto the table edge in front of the seat, which runs
+    // on across the lap (`beside` of the armrest node). The armchair (x = 0) keeps its arms.
+    let c = afford::cloud::load(Path::new("data/sample/room.ply"))
+        .unwrap()
+        .cloud;
+    let o = run(&c, 1.75);
+    let near = |x: f64| {
+        o.detections
+            .iter()
+            .find(|d| (d.position.x - x).abs() < 0.3 && d.position.y.abs() < 0.3)
+            .map(|d| d.affordances.clone())
+    };
+    assert_eq!(near(1.35).unwrap(), ["sitting", "backrest"]);
+    assert_eq!(near(0.0).unwrap(), ["sitting", "armrest", "backrest"]);
+}
+
+#[test]
 fn a_table_a_shelf_and_an_empty_floor_afford_nothing() {
     for meshes in [
         vec![table(&TableParams::default())],

@@ -103,9 +103,14 @@ pub fn hypotheses(
                 Orientation::Parallel => d,
                 Orientation::Orthogonal => d + std::f64::consts::FRAC_PI_2,
             };
-            let heading = across.map(turn);
             let facing =
                 away_from_highest(&band, ix, iy, &neighbourhood, mean, facing_tolerance).map(turn);
+            // A descent that climbs towards the tallest top was turned round by a larger,
+            // lower surface beyond the seat (the table a chair is pushed in at).
+            let heading = match (across.map(turn), facing) {
+                (Some(d), Some(f)) if rule_.facing_overrules && (d - f).cos() < 0.0 => Some(f),
+                (d, _) => d,
+            };
             let (x, y) = map.centre(ix, iy);
             out.push(Hypothesis {
                 cell: (ix, iy),
@@ -400,6 +405,7 @@ mod tests {
             gradient_radius: 0.1,
             flat_gradient: 0.05,
             facing_tolerance: None,
+            facing_overrules: false,
             discontinuity: Low {
                 full: 0.1,
                 zero: 0.4,
@@ -525,6 +531,27 @@ mod tests {
         // Nothing above the place: no facing.
         let flat = map(|_, _| Some(0.45));
         assert_eq!(away_from_highest(&flat, 10, 10, &disc, 0.45, 0.05), None);
+        // The hypothesis at the seat's middle: the descent's heading, unless the facing
+        // overrules it.
+        let at = |overrules: bool| {
+            let rule = HypothesisRule {
+                gradient_radius: 0.4,
+                facing_tolerance: Some(0.05),
+                facing_overrules: overrules,
+                ..rule_()
+            };
+            let hyps = hypotheses(&m, &rule, Orientation::Parallel, 1.0);
+            let h = hyps.iter().find(|h| h.cell == (10, 10)).unwrap().clone();
+            (h.heading.unwrap(), h.facing.unwrap())
+        };
+        let (kept, facing) = at(false);
+        assert!((kept - d).abs() < 1e-12 && (facing - f).abs() < 1e-12);
+        let (turned, _) = at(true);
+        assert!(
+            (turned - f).abs() < 1e-12,
+            "heading {}",
+            turned.to_degrees()
+        );
     }
 
     /// A band of rows answers as the map for every cell its template and neighbourhood

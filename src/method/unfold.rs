@@ -226,6 +226,43 @@ impl NodeContext<'_> {
         })
     }
 
+    /// `beside`: whether every part of `parts` that touches the scene is beside the body,
+    /// not on something that runs on across in front of it: along the node's `over` link
+    /// in `posture` (the thigh: the lap), moved sideways onto the body's midplane (the
+    /// vertical plane through the root joint along the heading) and raised to the part's
+    /// axis height, no scene lies within the `beside` gap below the part's underside.
+    /// True when the node has no `beside` rule.
+    pub fn beside(&self, posture: &Posture, parts: &[Cylinder]) -> bool {
+        let Some(rule) = self.node.beside else {
+            return true;
+        };
+        let mut frames = Vec::new();
+        self.agent
+            .forward_kinematics(self.place, posture, &mut frames);
+        let Some(over) = self
+            .agent
+            .cylinders(&frames, |j| j == rule.over)
+            .into_iter()
+            .next()
+        else {
+            return true;
+        };
+        let (s, c) = self.place.yaw.sin_cos();
+        let side = nalgebra::Vector3::new(-s, c, 0.0);
+        let onto = |p: nalgebra::Point3<f64>| p - side * (p - self.place.position).dot(&side);
+        let (a, b) = (onto(over.a), onto(over.b));
+        let step = self.scene.voxel_size();
+        let n = to_usize(((b - a).norm() / step).ceil().max(1.0));
+        parts.iter().filter(|p| self.scene.touches(p)).all(|p| {
+            let z = nalgebra::center(&p.a, &p.b).z;
+            (0..=n).all(|i| {
+                let mut q = a + (b - a) * (i as f64 / n as f64);
+                q.z = z;
+                self.scene.drop_below(&q, p.radius + rule.gap) - p.radius > rule.gap
+            })
+        })
+    }
+
     /// `support`: whether the branch's support parts (if the node has any that the branch
     /// moves) rest on the scene at sweep parameter `t`: some part has the scene within
     /// `support_gap` below it, or (with `unseen_reach`) space the scan never saw.
@@ -376,6 +413,13 @@ impl NodeContext<'_> {
             let mut parts = Vec::new();
             motion(t, &mut parts);
             if !self.release(&parts) {
+                blocked = hit.take();
+            }
+        }
+        if let (Some(t), Some(_)) = (hit, node.beside) {
+            let mut parts = Vec::new();
+            motion(t, &mut parts);
+            if !self.beside(&p, &parts) {
                 blocked = hit.take();
             }
         }

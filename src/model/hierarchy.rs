@@ -41,6 +41,12 @@ pub struct HypothesisRule {
     /// then follows the scene, not the frame); absent: the highest cells only.
     #[serde(default)]
     pub facing_tolerance: Option<f64>,
+    /// Where the plane fit's descent points more than 90 degrees from facing away from
+    /// that top (it climbs towards it), the facing heading replaces it (an extension: a
+    /// larger, lower surface beyond the seat, such as the table a chair is pushed in at,
+    /// turns the fit round); absent: false, the descent is kept.
+    #[serde(default)]
+    pub facing_overrules: bool,
     /// "Discontinuity is low": share of invalid cells under the template.
     pub discontinuity: Low,
     /// "Roughness is low": standard deviation of heights under the template, metres.
@@ -202,6 +208,22 @@ pub struct Node {
     /// as resting: a bed cut by the image edge, or whose far end the camera cannot see.
     /// `None`: only a surface counts.
     pub unseen_reach: Option<f64>,
+    /// What the node finds lies beside the body, not across in front of it (`None`: no
+    /// such test).
+    pub beside: Option<Beside>,
+}
+
+/// A node's `beside` rule: a contact counts only if, over the body's midplane along the
+/// link `over` (moved sideways onto the midplane: the lap, for a thigh), nothing of the
+/// scene lies within `gap` metres below the height of each touching part's underside. An
+/// armrest carries the forearm at the body's side with the lap free between the arms; a
+/// table edge touched by the forearm runs on across in front of the body.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Beside {
+    /// Metres below the touching part's underside.
+    pub gap: f64,
+    /// The link whose axis, moved onto the midplane, is searched.
+    pub over: usize,
 }
 
 /// How many of a node's kinematic branches must touch for its affordance to be found.
@@ -372,6 +394,15 @@ struct NodeFile {
     support_gap: f64,
     #[serde(default)]
     unseen_reach: Option<f64>,
+    #[serde(default)]
+    beside: Option<BesideFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BesideFile {
+    gap: f64,
+    over: String,
 }
 
 #[derive(Deserialize)]
@@ -904,6 +935,22 @@ fn resolve_node(
     if !(n.support_gap.is_finite() && n.support_gap >= 0.0) {
         return Err(src.invalid(&key.key("support_gap"), "must be 0 or more metres"));
     }
+    let beside = match &n.beside {
+        None => None,
+        Some(b) => {
+            // A gap of a metre or more below a forearm is no longer "across in front of it".
+            if !(b.gap >= 0.0 && b.gap < 1.0) {
+                return Err(src.invalid(
+                    &key.key("beside").key("gap"),
+                    format!("must be 0 or more and under 1 metre, not {}", b.gap),
+                ));
+            }
+            Some(Beside {
+                gap: b.gap,
+                over: names.link(&key.key("beside").key("over"), &b.over)?,
+            })
+        }
+    };
     if let Some(r) = n.unseen_reach {
         // Beyond a body's width no gap in a scan is a place the body could rest on.
         if !(r > 0.0 && r <= 1.0) {
@@ -1069,6 +1116,7 @@ fn resolve_node(
         support,
         support_gap: n.support_gap,
         unseen_reach: n.unseen_reach,
+        beside,
     })
 }
 
@@ -1487,6 +1535,19 @@ mod tests {
         );
         let (e, line) = edited("facing_tolerance = 0.05", "facing_tolerance = -0.05");
         names(&e, line, "hypothesis.facing_tolerance", "-0.05");
+    }
+
+    #[test]
+    fn a_bad_beside_rule_is_named() {
+        let rule = "beside = { gap = 0.05, over = \"thigh_l\" }";
+        assert_eq!(BUILTIN_SITTING.matches(rule).count(), 1);
+        let armrest = &load(BUILTIN_SITTING).unwrap().nodes[1];
+        assert_eq!(armrest.id, "armrest");
+        assert_eq!(armrest.beside.map(|b| b.gap), Some(0.05));
+        let (e, line) = edited(rule, "beside = { gap = 0.05, over = \"lap\" }");
+        names(&e, line, "node.armrest.beside.over", "unknown link `lap`");
+        let (e, line) = edited(rule, "beside = { gap = 1.5, over = \"thigh_l\" }");
+        names(&e, line, "node.armrest.beside.gap", "under 1 metre");
     }
 
     #[test]
