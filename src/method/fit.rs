@@ -20,6 +20,10 @@ pub struct Fit {
     pub posture: Posture,
     /// Stability score s of Eq. 1, in (0, 1].
     pub stability: f64,
+    /// Whether the heading came from the all-round search after none of the offsets round
+    /// the place's own heading was free: such a pose is turned from where the place
+    /// faces, and ranks below the others (`Unfolded::rank`).
+    pub turned: bool,
 }
 
 /// Numbers of the fitting that are not the hierarchy's: how finely contact is located.
@@ -30,14 +34,20 @@ pub struct ContactConfig {
 }
 
 /// Headings (radians) to try at a hypothesis, in order: the offsets of the hierarchy
-/// around its heading, or, when it has none, every `fallback_yaw_step` round from the
-/// heading facing away from the highest neighbour ([`Hypothesis::facing`]; world +x only
-/// where nothing rises round the place).
+/// around the place's own heading (the gradient heading, else the heading facing away from
+/// the tallest thing near it, [`Hypothesis::facing`]), or every `fallback_yaw_step` round
+/// from world +x where it has neither (nothing rises round a flat place).
 pub fn headings(h: &Hierarchy, hyp: &Hypothesis) -> Vec<f64> {
-    match hyp.heading {
+    match own_heading(hyp) {
         Some(yaw) => h.fit.yaw_offsets.iter().map(|o| yaw + o).collect(),
-        None => all_round(hyp.facing.unwrap_or(0.0), h.fit.fallback_yaw_step),
+        None => all_round(0.0, h.fit.fallback_yaw_step),
     }
+}
+
+/// The heading a place suggests: its gradient heading, else the heading facing away from
+/// the tallest thing near it; `None` where neither exists.
+fn own_heading(hyp: &Hypothesis) -> Option<f64> {
+    hyp.heading.or(hyp.facing)
 }
 
 /// Headings `step` apart all round, nearest to `from` first: `from`, then one step either
@@ -77,9 +87,9 @@ pub fn fit(
     fit_checking(agent, h, scene, hyp, contact, &unchecked)
 }
 
-/// [`fit`] with the links `unchecked` left out of the collision tests: the headings
-/// around the hypothesis heading, then all round, from [`Hypothesis::facing`], if none of
-/// them was free.
+/// [`fit`] with the links `unchecked` left out of the collision tests: the headings of
+/// [`headings`], then, if none of them was free, all round from [`Hypothesis::facing`]
+/// (else the place's own heading), those fits marked [`Fit::turned`].
 fn fit_checking(
     agent: &Agent,
     h: &Hierarchy,
@@ -90,18 +100,19 @@ fn fit_checking(
 ) -> Vec<Fit> {
     let first = headings(h, hyp);
     let (fits, any_free) = fit_headings(agent, h, scene, hyp, &first, contact, unchecked);
-    if any_free || hyp.heading.is_none() {
+    let Some(own) = own_heading(hyp).filter(|_| !any_free) else {
         return fits;
-    }
+    };
     let tried = first;
-    let rest: Vec<f64> = all_round(
-        hyp.facing.or(hyp.heading).unwrap_or(0.0),
-        h.fit.fallback_yaw_step,
-    )
-    .into_iter()
-    .filter(|y| tried.iter().all(|t| angle_between(*t, *y) > 1e-6))
-    .collect();
-    fit_headings(agent, h, scene, hyp, &rest, contact, unchecked).0
+    let rest: Vec<f64> = all_round(hyp.facing.unwrap_or(own), h.fit.fallback_yaw_step)
+        .into_iter()
+        .filter(|y| tried.iter().all(|t| angle_between(*t, *y) > 1e-6))
+        .collect();
+    let mut turned = fit_headings(agent, h, scene, hyp, &rest, contact, unchecked).0;
+    for f in &mut turned {
+        f.turned = true;
+    }
+    turned
 }
 
 fn angle_between(a: f64, b: f64) -> f64 {
@@ -167,6 +178,7 @@ fn fit_headings(
                 placement,
                 posture: posture.clone(),
                 stability: s,
+                turned: false,
             });
         }
     }

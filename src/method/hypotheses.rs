@@ -6,7 +6,7 @@ use nalgebra::{Matrix3, Point3, Vector3};
 use crate::method::fuzzy::{rule, Trapezoid};
 use crate::method::heightmap::{Cells, HeightMap};
 use crate::model::hierarchy::{HypothesisRule, Orientation};
-use crate::num::to_usize;
+use crate::num::{to_isize, to_usize};
 
 /// A promising position for the agent.
 #[derive(Debug, Clone, PartialEq)]
@@ -24,10 +24,10 @@ pub struct Hypothesis {
     pub heading: Option<f64>,
     /// The heading facing away from the top of the tallest thing near the place (a chair's
     /// back rather than the table it stands at, whose larger top can turn the plane fit's
-    /// descent round): where the gradient gives no heading, or none of the headings round
-    /// it is free, the all-round search of the fitting starts here, so that its order, and
-    /// with it the pose kept among equally stable ones, follows the scene and not the frame
-    /// (section 4.2). `None` where nothing rises above the place.
+    /// descent round). Where the gradient gives no heading, the fitting tries its offsets
+    /// round this one; where none of those is free, its all-round search starts here, so
+    /// that the order, and with it the pose kept among equally stable ones, follows the
+    /// scene and not the frame (section 4.2). `None` where nothing rises above the place.
     pub facing: Option<f64>,
     /// The three memberships: discontinuity low, roughness low, height comfortable.
     pub memberships: [f64; 3],
@@ -201,6 +201,12 @@ pub struct Rating {
 
 /// Rates cell `(ix, iy)` of `map` with the torso `template` (cell offsets) and the
 /// `height` set already in metres; `None` if the cell is invalid.
+///
+/// With the rule's `hole_depth`, a template whose cells vary more than "roughness is low"
+/// fully allows is looked at again: cells more than `hole_depth` below the template's
+/// median height are gaps (the floor seen through a slatted or cut-out seat, or past its
+/// edge) and count as missing, towards the discontinuity, instead of as roughness; the
+/// mean and the roughness are then those of the other cells (an extension of section 4.1).
 pub fn rate(
     map: &impl Cells,
     ix: usize,
@@ -219,9 +225,55 @@ pub fn rate(
             top = top.max(h);
         }
     }
+    let spread = |n: usize, sum: f64, sum2: f64| {
+        let mean = sum / n as f64;
+        (mean, (sum2 / n as f64 - mean * mean).max(0.0).sqrt())
+    };
+    let (mut mean, mut roughness) = spread(n, sum, sum2);
+    if let Some(depth) = rule_.hole_depth {
+        if roughness > rule_.roughness.full {
+            let mut hs: Vec<f64> = template
+                .iter()
+                .filter_map(|&(dx, dy)| map.height(ix as isize + dx, iy as isize + dy))
+                .collect();
+            let mid = hs.len() / 2;
+            let (_, median, _) = hs.select_nth_unstable_by(mid, f64::total_cmp);
+            let (median, floor) = (*median, *median - depth);
+            let reach = template
+                .iter()
+                .map(|&(dx, dy)| dx.abs().max(dy.abs()))
+                .max()
+                .unwrap_or(0)
+                + 1;
+            let at = |dx: isize, dy: isize| map.height(ix as isize + dx, iy as isize + dy);
+            // A low cell is a gap when the surface goes on beyond it (a cell within
+            // `depth` of the median), seen from the place; past the surface's edge it does
+            // not, and the cell stays as roughness.
+            let enclosed = |dx: isize, dy: isize| {
+                let len = ((dx * dx + dy * dy) as f64).sqrt();
+                len == 0.0
+                    || (1..=reach).any(|k| {
+                        let t = 1.0 + k as f64 / len;
+                        let (x, y) = ((dx as f64 * t).round(), (dy as f64 * t).round());
+                        at(to_isize(x), to_isize(y)).is_some_and(|h| (h - median).abs() <= depth)
+                    })
+            };
+            let (mut m, mut s1, mut s2, mut t) = (0usize, 0.0, 0.0, f64::MIN);
+            for &(dx, dy) in template {
+                let Some(h) = at(dx, dy) else { continue };
+                if h < floor && enclosed(dx, dy) {
+                    continue;
+                }
+                m += 1;
+                s1 += h;
+                s2 += h * h;
+                t = t.max(h);
+            }
+            (n, top) = (m, t);
+            (mean, roughness) = spread(m, s1, s2);
+        }
+    }
     let discontinuity = 1.0 - n as f64 / template.len() as f64;
-    let mean = sum / n as f64;
-    let roughness = (sum2 / n as f64 - mean * mean).max(0.0).sqrt();
     Some(Rating {
         mean,
         top,
@@ -406,6 +458,7 @@ mod tests {
             flat_gradient: 0.05,
             facing_tolerance: None,
             facing_overrules: false,
+            hole_depth: None,
             discontinuity: Low {
                 full: 0.1,
                 zero: 0.4,
@@ -458,6 +511,40 @@ mod tests {
         assert_eq!(c.memberships, [1.0, 1.0, 1.0]);
         // The seat is flat: no preferred heading.
         assert_eq!(c.heading, None);
+    }
+
+    #[test]
+    fn floor_seen_through_a_seat_is_a_gap_and_past_its_edge_stays_rough() {
+        // A 12 x 12 cell seat at 0.45 m over the floor, with two cells of floor showing
+        // through it at (10, 10) and (11, 10); a template of radius 3 cells.
+        let m = map(|x, y| {
+            let seat = (4..16).contains(&x) && (4..16).contains(&y);
+            let hole = y == 10 && (x == 10 || x == 11);
+            Some(if seat && !hole { 0.45 } else { 0.0 })
+        });
+        let paper = HypothesisRule {
+            template_diameter: 0.3,
+            ..rule_()
+        };
+        let gaps = HypothesisRule {
+            hole_depth: Some(0.25),
+            ..paper.clone()
+        };
+        let template = m.disc(0.15);
+        let rated = |rule: &HypothesisRule, x: usize, y: usize| {
+            rate(&m, x, y, &template, None, rule).unwrap()
+        };
+        // Beside the holes: rough in the paper's rule, a smooth seat with two cells
+        // missing with the gaps.
+        assert_eq!(rated(&paper, 10, 11).memberships[1], 0.0);
+        let r = rated(&gaps, 10, 11);
+        assert_eq!(r.memberships, [1.0, 1.0, 1.0]);
+        assert!((r.mean - 0.45).abs() < 1e-12 && r.top == 0.45);
+        // At the seat's edge the floor beyond does not end: still rough either way.
+        assert_eq!(rated(&paper, 5, 10).memberships[1], 0.0);
+        assert_eq!(rated(&gaps, 5, 10).memberships[1], 0.0);
+        // A smooth place is rated the same by both.
+        assert_eq!(rated(&paper, 7, 6), rated(&gaps, 7, 6));
     }
 
     #[test]

@@ -40,6 +40,8 @@ pub struct Unfolded {
     pub score: f64,
     /// Stability of the fit (Eq. 1).
     pub stability: f64,
+    /// Whether the fit's heading came from the all-round search ([`Fit::turned`]).
+    pub turned: bool,
 }
 
 impl Unfolded {
@@ -66,9 +68,9 @@ impl Unfolded {
         use crate::model::hierarchy::Selection;
         match select {
             Selection::Score => self.score.total_cmp(&other.score),
-            Selection::MostSpecific => self
-                .found()
-                .cmp(&other.found())
+            Selection::MostSpecific => (!self.turned)
+                .cmp(&!other.turned)
+                .then(self.found().cmp(&other.found()))
                 .then(self.score.total_cmp(&other.score)),
         }
     }
@@ -140,6 +142,7 @@ pub fn unfold(
         nodes,
         score,
         stability: fit.stability,
+        turned: fit.turned,
     }
 }
 
@@ -720,6 +723,35 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
             node,
             contact: &CONTACT,
         }
+    }
+
+    #[test]
+    fn a_turned_pose_ranks_below_one_at_the_places_heading() {
+        use crate::model::hierarchy::Selection;
+        let pose = |turned: bool, found: usize, score: f64| Unfolded {
+            placement: Placement {
+                position: Point3::origin(),
+                yaw: 0.0,
+            },
+            posture: Posture {
+                angles: Vec::new(),
+                axes: Vec::new(),
+            },
+            nodes: (0..4)
+                .map(|i| NodeOutcome {
+                    visited: true,
+                    found: i < found,
+                    local: 1.0,
+                })
+                .collect(),
+            score,
+            stability: 1.0,
+            turned,
+        };
+        let (natural, turned) = (pose(false, 2, 0.9), pose(true, 3, 0.99));
+        assert!(natural.stronger_than(&turned, Selection::MostSpecific));
+        assert!(turned.stronger_than(&natural, Selection::Score));
+        assert!(pose(false, 3, 0.5).stronger_than(&natural, Selection::MostSpecific));
     }
 
     #[test]

@@ -51,6 +51,12 @@ pub struct HypothesisRule {
     pub discontinuity: Low,
     /// "Roughness is low": standard deviation of heights under the template, metres.
     pub roughness: Low,
+    /// Cells this far (metres) below the template's median height are gaps, counted as
+    /// missing rather than as roughness, where the template is rougher than `roughness`
+    /// fully allows (an extension: the floor seen through a slatted seat); absent: every
+    /// valid cell counts towards the roughness, as in the paper.
+    #[serde(default)]
+    pub hole_depth: Option<f64>,
     /// "Height is comfortable": mean height under the template, fractions of H;
     /// absent to switch the height membership off.
     #[serde(default)]
@@ -780,6 +786,11 @@ fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
             &score.key("support_angle"),
             format!("must be 0-180 degrees, not {}", s.support_angle),
         ));
+    }
+    if let Some(v) = h.hole_depth {
+        if !Positive.holds(v) {
+            return Err(src.invalid(&hyp.key("hole_depth"), Positive.what(v)));
+        }
     }
     if let Some(v) = h.facing_tolerance {
         if !NonNegative.holds(v) {
@@ -1525,6 +1536,16 @@ mod tests {
                 what,
             );
         }
+    }
+
+    #[test]
+    fn a_bad_hole_depth_is_named() {
+        assert_eq!(
+            load(BUILTIN_SITTING).unwrap().hypothesis.hole_depth,
+            Some(0.25)
+        );
+        let (e, line) = edited("hole_depth = 0.25", "hole_depth = 0.0");
+        names(&e, line, "hypothesis.hole_depth", "positive");
     }
 
     #[test]
