@@ -253,19 +253,27 @@ impl HeightMap {
             // A cell centre within `reach` is at most `reach / cell + 0.5` cells from the
             // point's cell, so cells beyond `ceil(reach / cell)` need no test.
             let rp = to_isize((reach / cell).ceil()).min(r);
+            let reach2 = reach * reach;
             for dy in -rp..=rp {
+                let jy = iy + dy;
+                if jy < 0 || jy >= ny as isize {
+                    continue;
+                }
+                let cy = (jy as f64 + 0.5 - fy) * cell;
+                let cy2 = cy * cy;
+                // No cell of a row whose centre line is out of reach is within it: the
+                // rounded sum `cx * cx + cy2` is at least `cy2`, so the test below fails
+                // for every column (the same cells as testing each).
+                if cy2 > reach2 {
+                    continue;
+                }
                 for dx in -rp..=rp {
-                    let (jx, jy) = (ix + dx, iy + dy);
-                    if (dx, dy) == (0, 0)
-                        || jx < 0
-                        || jy < 0
-                        || jx >= nx as isize
-                        || jy >= ny as isize
-                    {
+                    let jx = ix + dx;
+                    if (dx, dy) == (0, 0) || jx < 0 || jx >= nx as isize {
                         continue;
                     }
-                    let (cx, cy) = ((jx as f64 + 0.5 - fx) * cell, (jy as f64 + 0.5 - fy) * cell);
-                    if cx * cx + cy * cy <= reach * reach {
+                    let cx = (jx as f64 + 0.5 - fx) * cell;
+                    if cx * cx + cy2 <= reach2 {
                         out.push((jx as usize, jy as usize));
                     }
                 }
