@@ -196,33 +196,30 @@ impl TileSpacing {
         // The K-th nearest neighbour of each query among its tile's points; a tile of few
         // points (a sparse patch, whose edge queries would find their neighbours farther
         // inside the tile than across its border) looks in the 26 tiles round it too.
-        let mut near: Vec<usize> = Vec::new();
+        let mut near: Vec<Point3<f64>> = Vec::new();
         for (k, m) in &members {
             if m.len() <= K {
                 continue;
             }
             near.clear();
+            // Where the tile's own points start in `near`.
+            let mut own = 0;
             if m.len() < FEW_IN_TILE {
                 for o in neighbourhood() {
                     if let Some(n) = members.get(&[k[0] + o[0], k[1] + o[1], k[2] + o[2]]) {
-                        near.extend(n);
+                        if o == [0, 0, 0] {
+                            own = near.len();
+                        }
+                        near.extend(n.iter().map(|&j| cloud.points[j]));
                     }
                 }
             } else {
-                near.extend(m);
+                near.extend(m.iter().map(|&j| cloud.points[j]));
             }
             let step = m.len().div_ceil(queries.max(1));
-            let mut kth: Vec<f64> = m
-                .iter()
+            let mut kth: Vec<f64> = (0..m.len())
                 .step_by(step)
-                .map(|&q| {
-                    let qp = cloud.points[q];
-                    kth_nearest(
-                        near.iter()
-                            .filter(|&&j| j != q)
-                            .map(|&j| cloud.points[j] - qp),
-                    )
-                })
+                .map(|q| kth_nearest_of(&near, own + q))
                 .collect();
             kth.sort_by(f64::total_cmp);
             out.values.insert(*k, kth[(kth.len() - 1) / 2]);
@@ -257,11 +254,42 @@ impl TileSpacing {
 /// fewer): the `K` smallest squared lengths are kept in order as they come, and the root
 /// taken of the last. The same value as sorting the lengths (`norm`, the root of
 /// `norm_squared`) and taking the `K`-th, since the root is monotonic, without holding
-/// or partitioning a distance per offset.
+/// or partitioning a distance per offset. (The reference for [`kth_nearest_of`].)
+#[cfg(test)]
 fn kth_nearest(offsets: impl Iterator<Item = nalgebra::Vector3<f64>>) -> f64 {
     let mut best = [f64::INFINITY; K];
     for v in offsets {
         let s = v.norm_squared();
+        if s < best[K - 1] {
+            let mut i = K - 1;
+            while i > 0 && best[i - 1] > s {
+                best[i] = best[i - 1];
+                i -= 1;
+            }
+            best[i] = s;
+        }
+    }
+    best[K - 1].sqrt()
+}
+
+/// The [`K`]-th smallest distance from `points[at]` to the other `points` (infinity with
+/// fewer than [`K`] others): [`kth_nearest`] of their offsets, bit for bit, without the
+/// squared length of the points farther along x alone than the `K`-th smallest so far.
+/// The squared length of an offset is the rounded sum of three non-negative squares, so at
+/// least its x square: such a point would not enter the `K` smallest (a length equal to
+/// the `K`-th does not either), and the `K` smallest of a set do not depend on the order
+/// they come in.
+fn kth_nearest_of(points: &[Point3<f64>], at: usize) -> f64 {
+    let Some(&qp) = points.get(at) else {
+        return f64::INFINITY;
+    };
+    let mut best = [f64::INFINITY; K];
+    for (j, p) in points.iter().enumerate() {
+        let dx = p.x - qp.x;
+        if dx * dx >= best[K - 1] || j == at {
+            continue;
+        }
+        let s = (p - qp).norm_squared();
         if s < best[K - 1] {
             let mut i = K - 1;
             while i > 0 && best[i - 1] > s {
@@ -393,5 +421,40 @@ mod tests {
             let got = kth_nearest(offsets.into_iter());
             assert_eq!(got.to_bits(), want.to_bits(), "round {round}");
         }
+    }
+
+    /// `kth_nearest_of` against `kth_nearest` of every other point's offset, bit for bit,
+    /// on seeded sets: continuous ones, ones on a coarse lattice (ties, repeated points,
+    /// equal x), and sets of fewer than `K + 1` points (infinity).
+    #[test]
+    fn kth_nearest_of_skips_no_nearer_point() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(13);
+        for round in 0..3000 {
+            let n = rng.random_range(1..80);
+            let lattice = round % 2 == 0;
+            let points: Vec<Point3<f64>> = (0..n)
+                .map(|_| {
+                    let mut c = || {
+                        let v: f64 = rng.random_range(-0.3..0.3);
+                        if lattice {
+                            (v * 10.0).round() * 0.1
+                        } else {
+                            v
+                        }
+                    };
+                    Point3::new(c(), c(), c())
+                })
+                .collect();
+            for at in 0..n {
+                let want = kth_nearest((0..n).filter(|&j| j != at).map(|j| points[j] - points[at]));
+                assert_eq!(
+                    kth_nearest_of(&points, at).to_bits(),
+                    want.to_bits(),
+                    "{round}"
+                );
+            }
+        }
+        assert_eq!(kth_nearest_of(&[], 0), f64::INFINITY);
     }
 }
