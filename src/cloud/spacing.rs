@@ -10,7 +10,7 @@ use nalgebra::Point3;
 
 use super::PointCloud;
 use crate::cellhash::{CellMap, CellSet};
-use crate::num::{to_i64, to_usize};
+use crate::num::{floor_i64, to_usize};
 
 /// Points whose neighbours [`point_spacing`] measures: evenly spread over the cloud's order.
 const QUERIES: usize = 256;
@@ -100,7 +100,7 @@ pub(crate) fn neighbour_distance(
         // Cells of a finite box over a finite cell are bounded: 2 sqrt(n) per axis at most.
         k.iter()
             .all(|v| v.is_finite() && v.abs() < 1e15)
-            .then(|| k.map(|v| to_i64(v.floor())))
+            .then(|| k.map(floor_i64))
     };
     let step = n.div_ceil(queries.max(1));
     let queries: Vec<(usize, Point3<f64>)> = cloud
@@ -230,13 +230,9 @@ impl TileSpacing {
     /// The key of the tile holding `p`; `None` for a point that is not finite.
     fn key(&self, p: &Point3<f64>) -> Option<[i64; 3]> {
         let f = (p - self.lo) / self.tile;
-        f.iter().all(|v| v.is_finite()).then(|| {
-            [
-                to_i64(f.x.floor()),
-                to_i64(f.y.floor()),
-                to_i64(f.z.floor()),
-            ]
-        })
+        f.iter()
+            .all(|v| v.is_finite())
+            .then(|| [floor_i64(f.x), floor_i64(f.y), floor_i64(f.z)])
     }
 
     /// The largest spacing of any tile, if any had enough points.

@@ -23,7 +23,7 @@ use nalgebra::Point3;
 use crate::cellhash::CellMap;
 use crate::cloud::PointCloud;
 use crate::detect::DetectConfig;
-use crate::num::to_i64;
+use crate::num::floor_i64;
 
 /// Limits of the guard stage. Defaults carry their reasons.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -185,7 +185,7 @@ pub fn grid_bytes(extent: [f64; 3], cfg: &DetectConfig, reach: f64) -> f64 {
 /// Per point, whether it lies in a connected region of coarse cubes (edge `cell`, touching
 /// by face, edge or corner) that holds at least `share` of the points, or in the largest.
 fn bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
-    let key = |p: &Point3<f64>| p.coords.map(|c| to_i64((c / cell).floor()));
+    let key = |p: &Point3<f64>| p.coords.map(|c| floor_i64(c / cell));
     // Cells numbered in the points' order and only looked up: the map's order is unused.
     let mut cells: CellMap<[i64; 3], usize> = CellMap::default();
     let mut of_point = Vec::with_capacity(points.len());

@@ -21,7 +21,7 @@ use parry3d::shape::{Cylinder as ParryCylinder, Voxels};
 
 use crate::cloud::PointCloud;
 use crate::model::agent::Cylinder;
-use crate::num::{to_f32, to_i64, to_usize};
+use crate::num::{floor_i64, to_f32, to_i64, to_usize};
 
 /// How the scene is built.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -720,13 +720,6 @@ enum Side {
     Inside,
     /// Neither: GJK decides.
     Boundary,
-}
-
-/// `v.floor() as i64` without a call to libm's `floor` (x86-64 without SSE4.1 has no
-/// rounding instruction): the same value for every `v` (saturating as `as` does).
-fn floor_i64(v: f64) -> i64 {
-    let t = to_i64(v);
-    t.saturating_sub(((t as f64) > v) as i64)
 }
 
 /// A grid key as parry3d's voxel index (`i32` per axis), saturating. Keys count voxels

@@ -6,7 +6,7 @@ use nalgebra::Point3;
 
 use crate::cellhash::CellMap;
 use crate::cloud::PointCloud;
-use crate::num::{index32, to_i64};
+use crate::num::{floor_i64, index32, to_i64};
 
 /// Parameters of the region growing (section 4.5).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,9 +65,9 @@ pub fn segment(
     let cell = cfg.grow_distance.max(1e-6);
     let key = |p: &Point3<f64>| {
         (
-            to_i64((p.x / cell).floor()),
-            to_i64((p.y / cell).floor()),
-            to_i64((p.z / cell).floor()),
+            floor_i64(p.x / cell),
+            floor_i64(p.y / cell),
+            floor_i64(p.z / cell),
         )
     };
     let mut grid = CellGrid::new(cloud, cfg.floor_height, key);
