@@ -54,9 +54,11 @@ pub(crate) fn robust_extent(cloud: &PointCloud) -> Option<Extent> {
     let mut hi = Point3::origin();
     for axis in 0..3 {
         let mut v: Vec<f64> = sample.iter().map(|p| p[axis]).collect();
-        v.sort_by(f64::total_cmp);
-        lo[axis] = v[cut];
-        hi[axis] = v[v.len() - 1 - cut];
+        // The values at two ranks of the sorted order (`total_cmp` orders every f64, and
+        // values it calls equal have the same bits): found by selection, not a sort.
+        let top = v.len() - 1 - cut;
+        lo[axis] = *v.select_nth_unstable_by(cut, f64::total_cmp).1;
+        hi[axis] = *v.select_nth_unstable_by(top, f64::total_cmp).1;
     }
     Some(Extent { n, lo, hi })
 }
@@ -119,8 +121,20 @@ pub(crate) fn neighbour_distance(
         }
     }
     let mut grid: CellMap<[i64; 3], Vec<usize>> = CellMap::default();
+    // Whether the last cell looked up is wanted: a run of points in one cell (as a depth
+    // image's rows give) looks it up once.
+    let mut last: Option<([i64; 3], bool)> = None;
     for (i, p) in cloud.points.iter().enumerate() {
-        if let Some(c) = key(p).filter(|c| wanted.contains(c)) {
+        let Some(c) = key(p) else { continue };
+        let want = match last {
+            Some((lc, w)) if lc == c => w,
+            _ => {
+                let w = wanted.contains(&c);
+                last = Some((c, w));
+                w
+            }
+        };
+        if want {
             let list = grid.entry(c).or_default();
             if list.len() <= MAX_SCANNED {
                 list.push(i);
@@ -243,6 +257,26 @@ impl TileSpacing {
     /// The spacing of the tile holding `p`, if it had enough points.
     pub fn at(&self, p: &Point3<f64>) -> Option<f64> {
         self.values.get(&self.key(p)?).copied()
+    }
+
+    /// [`TileSpacing::at`] of each of `points`, in order: a run of points in one tile (as
+    /// a depth image's rows give) looks its tile up once.
+    pub fn at_each(&self, points: &[Point3<f64>]) -> Vec<Option<f64>> {
+        let mut last: Option<([i64; 3], Option<f64>)> = None;
+        points
+            .iter()
+            .map(|p| {
+                let k = self.key(p)?;
+                match last {
+                    Some((lk, v)) if lk == k => v,
+                    _ => {
+                        let v = self.values.get(&k).copied();
+                        last = Some((k, v));
+                        v
+                    }
+                }
+            })
+            .collect()
     }
 }
 
@@ -375,6 +409,12 @@ mod tests {
         );
         // The cloud's median is the floor's.
         assert!((point_spacing(&c).unwrap() - 0.01).abs() < 1e-9);
+        // Looked up per point, runs of one tile once: the same as `at` of each.
+        let mut pts = c.points.clone();
+        pts.push(Point3::new(f64::NAN, 0.0, 0.0));
+        pts.extend(c.points.iter().rev().step_by(7));
+        let each: Vec<Option<f64>> = pts.iter().map(|p| t.at(p)).collect();
+        assert_eq!(t.at_each(&pts), each);
     }
 
     #[test]
