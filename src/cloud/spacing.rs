@@ -202,10 +202,21 @@ impl TileSpacing {
         };
         // Visited in the map's order, but each tile's value depends on its own points only.
         let mut members: CellMap<[i64; 3], Vec<usize>> = CellMap::default();
+        // A run of points in one tile (as a depth image's rows give) is added at once, in
+        // order: each tile lists its points by index, as adding them one by one does.
+        let mut run: Option<([i64; 3], usize)> = None;
         for (i, p) in cloud.points.iter().enumerate() {
-            if let Some(k) = out.key(p) {
-                members.entry(k).or_default().push(i);
+            let k = out.key(p);
+            if matches!(run, Some((rk, _)) if k == Some(rk)) {
+                continue;
             }
+            if let Some((rk, from)) = run.take() {
+                members.entry(rk).or_default().extend(from..i);
+            }
+            run = k.map(|k| (k, i));
+        }
+        if let Some((rk, from)) = run {
+            members.entry(rk).or_default().extend(from..cloud.len());
         }
         // The K-th nearest neighbour of each query among its tile's points; a tile of few
         // points (a sparse patch, whose edge queries would find their neighbours farther
