@@ -190,14 +190,23 @@ fn bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
     let mut cells: CellMap<[i64; 3], usize> = CellMap::default();
     let mut of_point = Vec::with_capacity(points.len());
     let mut keys: Vec<[i64; 3]> = Vec::new();
+    // The last cell and its number: a run of points in one cube looks it up once.
+    let mut last: Option<([i64; 3], usize)> = None;
     for p in points {
         let k = key(p);
         let k = [k.x, k.y, k.z];
-        let n = cells.len();
-        let id = *cells.entry(k).or_insert_with(|| {
-            keys.push(k);
-            n
-        });
+        let id = match last {
+            Some((lk, id)) if lk == k => id,
+            _ => {
+                let n = cells.len();
+                let id = *cells.entry(k).or_insert_with(|| {
+                    keys.push(k);
+                    n
+                });
+                last = Some((k, id));
+                id
+            }
+        };
         of_point.push(id);
     }
     // Union-find over the occupied cells.
