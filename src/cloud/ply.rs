@@ -598,10 +598,14 @@ fn read_binary_body<R: BufRead>(
     Ok(out)
 }
 
-/// For an element of scalar properties only: the size of a binary row (bytes), and for
-/// each of x, y, z that [`read_binary_body`] sets (the first of `xyz` naming a property),
-/// its index in `xyz`, byte offset in the row and type. `None` if a property is a list.
-fn fixed_row(v: &Element, xyz: [usize; 3]) -> Option<(usize, Vec<(usize, usize, Scalar)>)> {
+/// One of x, y, z in a binary row of scalars: its index in `xyz`, its byte offset in the
+/// row and its type.
+type RowField = (usize, usize, Scalar);
+
+/// For an element of scalar properties only: the size of a binary row (bytes), and the
+/// [`RowField`] of each of x, y, z that [`read_binary_body`] sets (the first of `xyz`
+/// naming a property). `None` if a property is a list.
+fn fixed_row(v: &Element, xyz: [usize; 3]) -> Option<(usize, Vec<RowField>)> {
     let mut fields = Vec::new();
     let mut size = 0;
     for (pi, p) in v.props.iter().enumerate() {
