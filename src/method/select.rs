@@ -70,7 +70,7 @@ pub fn segment(
             floor_i64(p.z / cell),
         )
     };
-    let mut grid = CellGrid::new(cloud, cfg.floor_height, key);
+    let mut grid = CellGrid::new(cloud, cfg.floor_height, &key);
     let r2 = cfg.grow_distance * cfg.grow_distance;
     // Taken points not yet grown from, with their cells.
     let mut queue: Vec<(usize, u32)> = Vec::new();
@@ -82,7 +82,7 @@ pub fn segment(
             for dy in -reach..=reach {
                 for dx in -reach..=reach {
                     if let Some(&c) = grid.ids.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
-                        grid.take(c, &mut label, s, &mut queue, |q| {
+                        grid.take(c, &cloud.points, &mut label, s, &mut queue, |q| {
                             (q - seed).norm() <= cfg.seed_radius
                         });
                     }
@@ -96,9 +96,9 @@ pub fn segment(
             }
             let p = cloud.points[i];
             let before = queue.len();
-            for n in grid.neighbours(c) {
+            for n in grid.neighbours(c, &cloud.points, &key) {
                 if n != NO_CELL {
-                    grid.take(n, &mut label, s, &mut queue, |q| {
+                    grid.take(n, &cloud.points, &mut label, s, &mut queue, |q| {
                         (q - p).norm_squared() <= r2
                     });
                 }
@@ -117,14 +117,15 @@ const NO_CELL: u32 = u32::MAX;
 struct CellGrid {
     /// Cell key (cell coordinates) to cell id, ids in order of the cells' first points.
     ids: CellMap<(i64, i64, i64), u32>,
-    /// Each cell's key, by id.
-    keys: Vec<(i64, i64, i64)>,
+    /// Each cell's first point (an index into the cloud), whose key is the cell's, by id.
+    first: Vec<u32>,
     /// Each cell's first entry in `entries`, by id.
-    start: Vec<usize>,
+    start: Vec<u32>,
     /// How many of a cell's entries are untaken (the first ones of its run), by id.
-    live: Vec<usize>,
-    /// Points (position and index in the cloud), by cell, in index order within a cell.
-    entries: Vec<(Point3<f64>, usize)>,
+    live: Vec<u32>,
+    /// Indices of the points in the cloud, by cell, in index order within a cell (`u32`,
+    /// half the memory of `usize`; see [`CellGrid::new`]).
+    entries: Vec<u32>,
     /// A cell's index in `table` once its neighbours were looked up, else [`NO_CELL`].
     slot: Vec<u32>,
     /// The 27 cells around a cell (offsets in z, then y, then x, each from −1 to 1), by
@@ -135,48 +136,47 @@ struct CellGrid {
 impl CellGrid {
     /// The cells of the points of `cloud` at least `floor_height` high, by `key`.
     ///
-    /// Cell ids are `u32`: a cloud has fewer cells than points, and 2^32 points would take
-    /// 96 GiB of coordinates.
+    /// Cell ids and point indices are `u32`: a cloud has fewer cells than points, and 2^32
+    /// points would take 96 GiB of coordinates.
     fn new(
         cloud: &PointCloud,
         floor_height: f64,
-        key: impl Fn(&Point3<f64>) -> (i64, i64, i64),
+        key: &impl Fn(&Point3<f64>) -> (i64, i64, i64),
     ) -> Self {
         let mut ids: CellMap<(i64, i64, i64), u32> = CellMap::default();
-        let mut keys: Vec<(i64, i64, i64)> = Vec::new();
-        let mut count: Vec<usize> = Vec::new();
+        let mut first: Vec<u32> = Vec::new();
+        let mut count: Vec<u32> = Vec::new();
         let mut cell_of: Vec<u32> = vec![NO_CELL; cloud.len()];
         for (i, p) in cloud.points.iter().enumerate() {
             if p.z >= floor_height {
-                let k = key(p);
-                let c = *ids.entry(k).or_insert_with(|| {
-                    keys.push(k);
+                let c = *ids.entry(key(p)).or_insert_with(|| {
+                    first.push(index32(i));
                     count.push(0);
-                    index32(keys.len() - 1)
+                    index32(first.len() - 1)
                 });
                 count[c as usize] += 1;
                 cell_of[i] = c;
             }
         }
         let mut start = Vec::with_capacity(count.len());
-        let mut next = 0;
+        let mut next = 0u32;
         for &n in &count {
             start.push(next);
             next += n;
         }
         let mut fill = start.clone();
-        let mut entries = vec![(Point3::origin(), 0); next];
+        let mut entries = vec![0u32; next as usize];
         for (i, &c) in cell_of.iter().enumerate() {
             if c != NO_CELL {
                 let f = &mut fill[c as usize];
-                entries[*f] = (cloud.points[i], i);
+                entries[*f as usize] = index32(i);
                 *f += 1;
             }
         }
         CellGrid {
             ids,
-            slot: vec![NO_CELL; keys.len()],
-            keys,
+            slot: vec![NO_CELL; first.len()],
+            first,
             start,
             live: count,
             entries,
@@ -184,11 +184,17 @@ impl CellGrid {
         }
     }
 
-    /// The 27 cells around cell `c` (see `table`), looked up once per cell.
-    fn neighbours(&mut self, c: u32) -> [u32; 27] {
+    /// The 27 cells around cell `c` (see `table`) of the grid of `points` by `key`, looked
+    /// up once per cell.
+    fn neighbours(
+        &mut self,
+        c: u32,
+        points: &[Point3<f64>],
+        key: &impl Fn(&Point3<f64>) -> (i64, i64, i64),
+    ) -> [u32; 27] {
         let c = c as usize;
         if self.slot[c] == NO_CELL {
-            let k = self.keys[c];
+            let k = key(&points[self.first[c] as usize]);
             let mut around = [NO_CELL; 27];
             let mut n = 0;
             for dz in -1..=1 {
@@ -207,31 +213,33 @@ impl CellGrid {
         self.table[self.slot[c] as usize]
     }
 
-    /// Takes for seed `s` the untaken points of cell `c` that pass `near`, in index order:
-    /// labels them, pushes them with their cell on `queue` and drops them from the cell's
-    /// run, keeping the order of the others.
+    /// Takes for seed `s` the untaken points of cell `c` (of `points`) that pass `near`, in
+    /// index order: labels them, pushes them with their cell on `queue` and drops them
+    /// from the cell's run, keeping the order of the others.
     fn take(
         &mut self,
         c: u32,
+        points: &[Point3<f64>],
         label: &mut [Option<usize>],
         s: usize,
         queue: &mut Vec<(usize, u32)>,
         near: impl Fn(Point3<f64>) -> bool,
     ) {
-        let from = self.start[c as usize];
-        let to = from + self.live[c as usize];
+        let from = self.start[c as usize] as usize;
+        let to = from + self.live[c as usize] as usize;
         let mut kept = from;
         for e in from..to {
-            let (q, i) = self.entries[e];
-            if near(q) {
+            let j = self.entries[e];
+            let i = j as usize;
+            if near(points[i]) {
                 label[i] = Some(s);
                 queue.push((i, c));
             } else {
-                self.entries[kept] = (q, i);
+                self.entries[kept] = j;
                 kept += 1;
             }
         }
-        self.live[c as usize] = kept - from;
+        self.live[c as usize] = index32(kept - from);
     }
 }
 
