@@ -272,22 +272,22 @@ impl TileSpacing {
 
     /// [`TileSpacing::at`] of each of `points`, in order: a run of points in one tile (as
     /// a depth image's rows give) looks its tile up once.
-    pub fn at_each(&self, points: &[Point3<f64>]) -> Vec<Option<f64>> {
+    pub fn at_each<'a>(
+        &'a self,
+        points: &'a [Point3<f64>],
+    ) -> impl Iterator<Item = Option<f64>> + 'a {
         let mut last: Option<([i64; 3], Option<f64>)> = None;
-        points
-            .iter()
-            .map(|p| {
-                let k = self.key(p)?;
-                match last {
-                    Some((lk, v)) if lk == k => v,
-                    _ => {
-                        let v = self.values.get(&k).copied();
-                        last = Some((k, v));
-                        v
-                    }
+        points.iter().map(move |p| {
+            let k = self.key(p)?;
+            match last {
+                Some((lk, v)) if lk == k => v,
+                _ => {
+                    let v = self.values.get(&k).copied();
+                    last = Some((k, v));
+                    v
                 }
-            })
-            .collect()
+            }
+        })
     }
 }
 
@@ -425,7 +425,7 @@ mod tests {
         pts.push(Point3::new(f64::NAN, 0.0, 0.0));
         pts.extend(c.points.iter().rev().step_by(7));
         let each: Vec<Option<f64>> = pts.iter().map(|p| t.at(p)).collect();
-        assert_eq!(t.at_each(&pts), each);
+        assert_eq!(t.at_each(&pts).collect::<Vec<_>>(), each);
     }
 
     #[test]

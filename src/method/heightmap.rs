@@ -229,7 +229,6 @@ impl HeightMap {
         // once, for the passes below).
         let reaches: Vec<f64> = tiles
             .at_each(&cloud.points)
-            .into_iter()
             .map(|t| {
                 global.map_or(0.0, |g| {
                     let s = t.map_or(g, |t| t.max(g));
