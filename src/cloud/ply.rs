@@ -546,7 +546,7 @@ impl<R: Read> Src<R> {
     }
 }
 
-fn read_binary_body<R: Read>(
+fn read_binary_body<R: BufRead>(
     path: &Path,
     src: &mut Src<R>,
     h: &Header,
@@ -561,8 +561,27 @@ fn read_binary_body<R: Read>(
     let mut out = Vec::with_capacity(capacity(v.count, MAX_PREALLOC));
     let mut buf = [0u8; 8];
     let mut vals = [0f64; 3];
+    // Rows of scalars only have one size: a row wholly in the reader's buffer is decoded
+    // from it (the value of each of x, y, z at its byte offset), the others property by
+    // property as any row. The same values (each property decoded from the same bytes,
+    // and only the first of `xyz` naming a property set, as below), and the same errors,
+    // since a row that could end the file early is read the general way.
+    let row = fixed_row(v, xyz);
     for i in 0..v.count {
         let start = src.pos;
+        if let Some((size, fields)) = &row {
+            if let Ok(b) = src.r.fill_buf() {
+                if let Some(b) = b.get(..*size) {
+                    for &(k, off, s) in fields {
+                        vals[k] = s.decode(&b[off..], big);
+                    }
+                    src.r.consume(*size);
+                    src.pos += *size as u64;
+                    out.push(Point3::new(vals[0], vals[1], vals[2]));
+                    continue;
+                }
+            }
+        }
         for (pi, p) in v.props.iter().enumerate() {
             let res = match p.kind {
                 Kind::Scalar(s) => src.read_exact(&mut buf[..s.size()]).map(|()| {
@@ -577,6 +596,28 @@ fn read_binary_body<R: Read>(
         out.push(Point3::new(vals[0], vals[1], vals[2]));
     }
     Ok(out)
+}
+
+/// One of x, y, z in a binary row of scalars: its index in `xyz`, its byte offset in the
+/// row and its type.
+type RowField = (usize, usize, Scalar);
+
+/// For an element of scalar properties only: the size of a binary row (bytes), and the
+/// [`RowField`] of each of x, y, z that [`read_binary_body`] sets (the first of `xyz`
+/// naming a property). `None` if a property is a list.
+fn fixed_row(v: &Element, xyz: [usize; 3]) -> Option<(usize, Vec<RowField>)> {
+    let mut fields = Vec::new();
+    let mut size = 0;
+    for (pi, p) in v.props.iter().enumerate() {
+        let Kind::Scalar(s) = p.kind else {
+            return None;
+        };
+        if let Some(k) = xyz.iter().position(|&x| x == pi) {
+            fields.push((k, size, s));
+        }
+        size += s.size();
+    }
+    Some((size, fields))
 }
 
 /// Reads a list count and skips the items; the outer result is a bad count, the inner one I/O.

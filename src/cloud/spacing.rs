@@ -10,7 +10,7 @@ use nalgebra::Point3;
 
 use super::PointCloud;
 use crate::cellhash::{CellMap, CellSet};
-use crate::num::{to_i64, to_usize};
+use crate::num::{floor_i64, to_usize};
 
 /// Points whose neighbours [`point_spacing`] measures: evenly spread over the cloud's order.
 const QUERIES: usize = 256;
@@ -54,9 +54,11 @@ pub(crate) fn robust_extent(cloud: &PointCloud) -> Option<Extent> {
     let mut hi = Point3::origin();
     for axis in 0..3 {
         let mut v: Vec<f64> = sample.iter().map(|p| p[axis]).collect();
-        v.sort_by(f64::total_cmp);
-        lo[axis] = v[cut];
-        hi[axis] = v[v.len() - 1 - cut];
+        // The values at two ranks of the sorted order (`total_cmp` orders every f64, and
+        // values it calls equal have the same bits): found by selection, not a sort.
+        let top = v.len() - 1 - cut;
+        lo[axis] = *v.select_nth_unstable_by(cut, f64::total_cmp).1;
+        hi[axis] = *v.select_nth_unstable_by(top, f64::total_cmp).1;
     }
     Some(Extent { n, lo, hi })
 }
@@ -100,7 +102,7 @@ pub(crate) fn neighbour_distance(
         // Cells of a finite box over a finite cell are bounded: 2 sqrt(n) per axis at most.
         k.iter()
             .all(|v| v.is_finite() && v.abs() < 1e15)
-            .then(|| k.map(|v| to_i64(v.floor())))
+            .then(|| k.map(floor_i64))
     };
     let step = n.div_ceil(queries.max(1));
     let queries: Vec<(usize, Point3<f64>)> = cloud
@@ -119,8 +121,20 @@ pub(crate) fn neighbour_distance(
         }
     }
     let mut grid: CellMap<[i64; 3], Vec<usize>> = CellMap::default();
+    // Whether the last cell looked up is wanted: a run of points in one cell (as a depth
+    // image's rows give) looks it up once.
+    let mut last: Option<([i64; 3], bool)> = None;
     for (i, p) in cloud.points.iter().enumerate() {
-        if let Some(c) = key(p).filter(|c| wanted.contains(c)) {
+        let Some(c) = key(p) else { continue };
+        let want = match last {
+            Some((lc, w)) if lc == c => w,
+            _ => {
+                let w = wanted.contains(&c);
+                last = Some((c, w));
+                w
+            }
+        };
+        if want {
             let list = grid.entry(c).or_default();
             if list.len() <= MAX_SCANNED {
                 list.push(i);
@@ -188,41 +202,49 @@ impl TileSpacing {
         };
         // Visited in the map's order, but each tile's value depends on its own points only.
         let mut members: CellMap<[i64; 3], Vec<usize>> = CellMap::default();
+        // A run of points in one tile (as a depth image's rows give) is added at once, in
+        // order: each tile lists its points by index, as adding them one by one does.
+        let mut run: Option<([i64; 3], usize)> = None;
         for (i, p) in cloud.points.iter().enumerate() {
-            if let Some(k) = out.key(p) {
-                members.entry(k).or_default().push(i);
+            let k = out.key(p);
+            if matches!(run, Some((rk, _)) if k == Some(rk)) {
+                continue;
             }
+            if let Some((rk, from)) = run.take() {
+                members.entry(rk).or_default().extend(from..i);
+            }
+            run = k.map(|k| (k, i));
+        }
+        if let Some((rk, from)) = run {
+            members.entry(rk).or_default().extend(from..cloud.len());
         }
         // The K-th nearest neighbour of each query among its tile's points; a tile of few
         // points (a sparse patch, whose edge queries would find their neighbours farther
         // inside the tile than across its border) looks in the 26 tiles round it too.
-        let mut near: Vec<usize> = Vec::new();
+        let mut near: Vec<Point3<f64>> = Vec::new();
         for (k, m) in &members {
             if m.len() <= K {
                 continue;
             }
             near.clear();
+            // Where the tile's own points start in `near`.
+            let mut own = 0;
             if m.len() < FEW_IN_TILE {
                 for o in neighbourhood() {
                     if let Some(n) = members.get(&[k[0] + o[0], k[1] + o[1], k[2] + o[2]]) {
-                        near.extend(n);
+                        if o == [0, 0, 0] {
+                            own = near.len();
+                        }
+                        near.extend(n.iter().map(|&j| cloud.points[j]));
                     }
                 }
             } else {
-                near.extend(m);
+                near.extend(m.iter().map(|&j| cloud.points[j]));
             }
             let step = m.len().div_ceil(queries.max(1));
-            let mut kth: Vec<f64> = m
-                .iter()
+            let mut kth: Vec<f64> = (0..m.len())
                 .step_by(step)
-                .map(|&q| {
-                    let qp = cloud.points[q];
-                    kth_nearest(
-                        near.iter()
-                            .filter(|&&j| j != q)
-                            .map(|&j| cloud.points[j] - qp),
-                    )
-                })
+                .map(|q| kth_nearest_of(&near, own + q))
                 .collect();
             kth.sort_by(f64::total_cmp);
             out.values.insert(*k, kth[(kth.len() - 1) / 2]);
@@ -233,13 +255,9 @@ impl TileSpacing {
     /// The key of the tile holding `p`; `None` for a point that is not finite.
     fn key(&self, p: &Point3<f64>) -> Option<[i64; 3]> {
         let f = (p - self.lo) / self.tile;
-        f.iter().all(|v| v.is_finite()).then(|| {
-            [
-                to_i64(f.x.floor()),
-                to_i64(f.y.floor()),
-                to_i64(f.z.floor()),
-            ]
-        })
+        f.iter()
+            .all(|v| v.is_finite())
+            .then(|| [floor_i64(f.x), floor_i64(f.y), floor_i64(f.z)])
     }
 
     /// The largest spacing of any tile, if any had enough points.
@@ -251,17 +269,68 @@ impl TileSpacing {
     pub fn at(&self, p: &Point3<f64>) -> Option<f64> {
         self.values.get(&self.key(p)?).copied()
     }
+
+    /// [`TileSpacing::at`] of each of `points`, in order: a run of points in one tile (as
+    /// a depth image's rows give) looks its tile up once.
+    pub fn at_each<'a>(
+        &'a self,
+        points: &'a [Point3<f64>],
+    ) -> impl Iterator<Item = Option<f64>> + 'a {
+        let mut last: Option<([i64; 3], Option<f64>)> = None;
+        points.iter().map(move |p| {
+            let k = self.key(p)?;
+            match last {
+                Some((lk, v)) if lk == k => v,
+                _ => {
+                    let v = self.values.get(&k).copied();
+                    last = Some((k, v));
+                    v
+                }
+            }
+        })
+    }
 }
 
 /// The [`K`]-th smallest length of `offsets` (at least [`K`] of them; infinity with
 /// fewer): the `K` smallest squared lengths are kept in order as they come, and the root
 /// taken of the last. The same value as sorting the lengths (`norm`, the root of
 /// `norm_squared`) and taking the `K`-th, since the root is monotonic, without holding
-/// or partitioning a distance per offset.
+/// or partitioning a distance per offset. (The reference for [`kth_nearest_of`].)
+#[cfg(test)]
 fn kth_nearest(offsets: impl Iterator<Item = nalgebra::Vector3<f64>>) -> f64 {
     let mut best = [f64::INFINITY; K];
     for v in offsets {
         let s = v.norm_squared();
+        if s < best[K - 1] {
+            let mut i = K - 1;
+            while i > 0 && best[i - 1] > s {
+                best[i] = best[i - 1];
+                i -= 1;
+            }
+            best[i] = s;
+        }
+    }
+    best[K - 1].sqrt()
+}
+
+/// The [`K`]-th smallest distance from `points[at]` to the other `points` (infinity with
+/// fewer than [`K`] others): [`kth_nearest`] of their offsets, bit for bit, without the
+/// squared length of the points farther along x alone than the `K`-th smallest so far.
+/// The squared length of an offset is the rounded sum of three non-negative squares, so at
+/// least its x square: such a point would not enter the `K` smallest (a length equal to
+/// the `K`-th does not either), and the `K` smallest of a set do not depend on the order
+/// they come in.
+fn kth_nearest_of(points: &[Point3<f64>], at: usize) -> f64 {
+    let Some(&qp) = points.get(at) else {
+        return f64::INFINITY;
+    };
+    let mut best = [f64::INFINITY; K];
+    for (j, p) in points.iter().enumerate() {
+        let dx = p.x - qp.x;
+        if dx * dx >= best[K - 1] || j == at {
+            continue;
+        }
+        let s = (p - qp).norm_squared();
         if s < best[K - 1] {
             let mut i = K - 1;
             while i > 0 && best[i - 1] > s {
@@ -351,6 +420,12 @@ mod tests {
         );
         // The cloud's median is the floor's.
         assert!((point_spacing(&c).unwrap() - 0.01).abs() < 1e-9);
+        // Looked up per point, runs of one tile once: the same as `at` of each.
+        let mut pts = c.points.clone();
+        pts.push(Point3::new(f64::NAN, 0.0, 0.0));
+        pts.extend(c.points.iter().rev().step_by(7));
+        let each: Vec<Option<f64>> = pts.iter().map(|p| t.at(p)).collect();
+        assert_eq!(t.at_each(&pts).collect::<Vec<_>>(), each);
     }
 
     #[test]
@@ -393,5 +468,40 @@ mod tests {
             let got = kth_nearest(offsets.into_iter());
             assert_eq!(got.to_bits(), want.to_bits(), "round {round}");
         }
+    }
+
+    /// `kth_nearest_of` against `kth_nearest` of every other point's offset, bit for bit,
+    /// on seeded sets: continuous ones, ones on a coarse lattice (ties, repeated points,
+    /// equal x), and sets of fewer than `K + 1` points (infinity).
+    #[test]
+    fn kth_nearest_of_skips_no_nearer_point() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(13);
+        for round in 0..3000 {
+            let n = rng.random_range(1..80);
+            let lattice = round % 2 == 0;
+            let points: Vec<Point3<f64>> = (0..n)
+                .map(|_| {
+                    let mut c = || {
+                        let v: f64 = rng.random_range(-0.3..0.3);
+                        if lattice {
+                            (v * 10.0).round() * 0.1
+                        } else {
+                            v
+                        }
+                    };
+                    Point3::new(c(), c(), c())
+                })
+                .collect();
+            for at in 0..n {
+                let want = kth_nearest((0..n).filter(|&j| j != at).map(|j| points[j] - points[at]));
+                assert_eq!(
+                    kth_nearest_of(&points, at).to_bits(),
+                    want.to_bits(),
+                    "{round}"
+                );
+            }
+        }
+        assert_eq!(kth_nearest_of(&[], 0), f64::INFINITY);
     }
 }

@@ -23,7 +23,7 @@ use nalgebra::Point3;
 use crate::cellhash::CellMap;
 use crate::cloud::PointCloud;
 use crate::detect::DetectConfig;
-use crate::num::to_i64;
+use crate::num::floor_i64;
 
 /// Limits of the guard stage. Defaults carry their reasons.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -185,19 +185,28 @@ pub fn grid_bytes(extent: [f64; 3], cfg: &DetectConfig, reach: f64) -> f64 {
 /// Per point, whether it lies in a connected region of coarse cubes (edge `cell`, touching
 /// by face, edge or corner) that holds at least `share` of the points, or in the largest.
 fn bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
-    let key = |p: &Point3<f64>| p.coords.map(|c| to_i64((c / cell).floor()));
+    let key = |p: &Point3<f64>| p.coords.map(|c| floor_i64(c / cell));
     // Cells numbered in the points' order and only looked up: the map's order is unused.
     let mut cells: CellMap<[i64; 3], usize> = CellMap::default();
     let mut of_point = Vec::with_capacity(points.len());
     let mut keys: Vec<[i64; 3]> = Vec::new();
+    // The last cell and its number: a run of points in one cube looks it up once.
+    let mut last: Option<([i64; 3], usize)> = None;
     for p in points {
         let k = key(p);
         let k = [k.x, k.y, k.z];
-        let n = cells.len();
-        let id = *cells.entry(k).or_insert_with(|| {
-            keys.push(k);
-            n
-        });
+        let id = match last {
+            Some((lk, id)) if lk == k => id,
+            _ => {
+                let n = cells.len();
+                let id = *cells.entry(k).or_insert_with(|| {
+                    keys.push(k);
+                    n
+                });
+                last = Some((k, id));
+                id
+            }
+        };
         of_point.push(id);
     }
     // Union-find over the occupied cells.

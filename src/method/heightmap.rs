@@ -227,12 +227,11 @@ impl HeightMap {
         let tiles = TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries);
         // How far each point reaches: its tile's spacing, at least the cloud's (looked up
         // once, for the passes below).
-        let reaches: Vec<f64> = cloud
-            .points
-            .iter()
-            .map(|p| {
+        let reaches: Vec<f64> = tiles
+            .at_each(&cloud.points)
+            .map(|t| {
                 global.map_or(0.0, |g| {
-                    let s = tiles.at(p).map_or(g, |t| t.max(g));
+                    let s = t.map_or(g, |t| t.max(g));
                     (cfg.sample_reach * s).min(cfg.max_reach)
                 })
             })
@@ -245,27 +244,44 @@ impl HeightMap {
             let (fx, fy) = ((p.x - lo.x) / cell, (p.y - lo.y) / cell);
             (fx, fy, to_usize(fx).min(nx - 1), to_usize(fy).min(ny - 1))
         };
+        // Every other cell's centre is at least half a cell from the point along x or y:
+        // `jx + 0.5 - fx` is at least 0.5 in size (`ix <= fx < ix + 1`, or `fx` beyond the
+        // last column, which has no right neighbour) and rounding keeps it so, so a
+        // point whose squared reach is below this reaches its own cell only (the same
+        // cells as testing each).
+        let half2 = (0.5 * cell) * (0.5 * cell);
         let cells_of = |p: &Point3<f64>, reach: f64, out: &mut Vec<(usize, usize)>| {
             out.clear();
             let (fx, fy, ix, iy) = own(p);
             out.push((ix, iy));
+            if reach * reach < half2 {
+                return;
+            }
             let (ix, iy) = (ix as isize, iy as isize);
             // A cell centre within `reach` is at most `reach / cell + 0.5` cells from the
             // point's cell, so cells beyond `ceil(reach / cell)` need no test.
             let rp = to_isize((reach / cell).ceil()).min(r);
+            let reach2 = reach * reach;
             for dy in -rp..=rp {
+                let jy = iy + dy;
+                if jy < 0 || jy >= ny as isize {
+                    continue;
+                }
+                let cy = (jy as f64 + 0.5 - fy) * cell;
+                let cy2 = cy * cy;
+                // No cell of a row whose centre line is out of reach is within it: the
+                // rounded sum `cx * cx + cy2` is at least `cy2`, so the test below fails
+                // for every column (the same cells as testing each).
+                if cy2 > reach2 {
+                    continue;
+                }
                 for dx in -rp..=rp {
-                    let (jx, jy) = (ix + dx, iy + dy);
-                    if (dx, dy) == (0, 0)
-                        || jx < 0
-                        || jy < 0
-                        || jx >= nx as isize
-                        || jy >= ny as isize
-                    {
+                    let jx = ix + dx;
+                    if (dx, dy) == (0, 0) || jx < 0 || jx >= nx as isize {
                         continue;
                     }
-                    let (cx, cy) = ((jx as f64 + 0.5 - fx) * cell, (jy as f64 + 0.5 - fy) * cell);
-                    if cx * cx + cy * cy <= reach * reach {
+                    let cx = (jx as f64 + 0.5 - fx) * cell;
+                    if cx * cx + cy2 <= reach2 {
                         out.push((jx as usize, jy as usize));
                     }
                 }

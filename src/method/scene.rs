@@ -21,7 +21,7 @@ use parry3d::shape::{Cylinder as ParryCylinder, Voxels};
 
 use crate::cloud::PointCloud;
 use crate::model::agent::Cylinder;
-use crate::num::{to_f32, to_i64, to_usize};
+use crate::num::{floor_i64, to_f32, to_i64, to_usize};
 
 /// How the scene is built.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,16 +85,7 @@ impl Scene {
         let origin = cloud.bounds().map_or(Vector3::zeros(), |(lo, hi)| {
             ((lo.coords + hi.coords) / 2.0).map(|c| (c / v).round() * v)
         });
-        let mut keys: Vec<[i64; 3]> = cloud
-            .points
-            .iter()
-            .map(|p| {
-                let l = (p.coords - origin) / v;
-                cell_of(&l)
-            })
-            .collect();
-        keys.sort_unstable();
-        keys.dedup();
+        let keys = occupied_keys(cloud, origin, v);
         if keys.is_empty() {
             return Scene {
                 voxel: v,
@@ -722,13 +713,6 @@ enum Side {
     Boundary,
 }
 
-/// `v.floor() as i64` without a call to libm's `floor` (x86-64 without SSE4.1 has no
-/// rounding instruction): the same value for every `v` (saturating as `as` does).
-fn floor_i64(v: f64) -> i64 {
-    let t = to_i64(v);
-    t.saturating_sub(((t as f64) > v) as i64)
-}
-
 /// A grid key as parry3d's voxel index (`i32` per axis), saturating. Keys count voxels
 /// from the cloud's centre, so they fit unless the extent is over 8,500 km at the finest
 /// voxel (2 mm; the extent guard allows coordinates up to 1e7 m); such a key stays at the
@@ -753,6 +737,25 @@ fn x32(x: usize) -> u32 {
 /// The grid cell of a position given in voxel units (local frame).
 fn cell_of(l: &Vector3<f64>) -> [i64; 3] {
     [floor_i64(l.x), floor_i64(l.y), floor_i64(l.z)]
+}
+
+/// The voxels holding a point of `cloud` (world frame, metres): the keys (cells of edge
+/// `v` from `origin`, [`cell_of`]) sorted and each once. A point in the voxel of the point
+/// before it (a run of points in one voxel, as a depth image's rows give) adds no key, so
+/// fewer keys are sorted: the same keys as sorting every point's and removing repeats
+/// (test `occupied_keys_are_the_sorted_distinct_keys`), in no more memory.
+fn occupied_keys(cloud: &PointCloud, origin: Vector3<f64>, v: f64) -> Vec<[i64; 3]> {
+    // Room for every point's key, as before; only the pages written are resident.
+    let mut keys: Vec<[i64; 3]> = Vec::with_capacity(cloud.len());
+    for p in &cloud.points {
+        let k = cell_of(&((p.coords - origin) / v));
+        if keys.last() != Some(&k) {
+            keys.push(k);
+        }
+    }
+    keys.sort_unstable();
+    keys.dedup();
+    keys
 }
 
 /// Height of the lowest point of a cylinder above z = 0, metres (negative below the floor).
@@ -1444,6 +1447,50 @@ mod dense {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `occupied_keys` against every point's key sorted with repeats removed, on seeded
+    /// clouds: runs of points in one voxel, voxels revisited later, points on voxel
+    /// faces, NaN and infinite coordinates.
+    #[test]
+    fn occupied_keys_are_the_sorted_distinct_keys() {
+        let mut state = 5u64;
+        for round in 0..200 {
+            let v = [0.02, 0.05, 0.1][round % 3];
+            let n = 1 + to_usize(uniform(&mut state) * 3000.0);
+            let mut pts = Vec::with_capacity(n);
+            let mut p = Point3::new(0.0, 0.0, 0.0);
+            for i in 0..n {
+                if uniform(&mut state) < 0.3 {
+                    p = Point3::new(
+                        uniform(&mut state) * 2.0 - 1.0,
+                        uniform(&mut state) * 2.0 - 1.0,
+                        uniform(&mut state) * 1.5,
+                    );
+                } else {
+                    p.x += (uniform(&mut state) - 0.5) * v;
+                }
+                if i % 97 == 0 {
+                    p.y = (p.y / v).round() * v;
+                }
+                pts.push(p);
+            }
+            if round % 7 == 0 {
+                pts.push(Point3::new(f64::NAN, 0.0, 0.1));
+                pts.push(Point3::new(0.0, f64::INFINITY, 0.1));
+                pts.push(Point3::new(0.0, 0.0, f64::NEG_INFINITY));
+            }
+            let cloud = PointCloud::new(pts);
+            let origin = Vector3::new(0.01, -0.02, 0.0);
+            let mut want: Vec<[i64; 3]> = cloud
+                .points
+                .iter()
+                .map(|p| cell_of(&((p.coords - origin) / v)))
+                .collect();
+            want.sort_unstable();
+            want.dedup();
+            assert_eq!(occupied_keys(&cloud, origin, v), want, "{round}");
+        }
+    }
     use dense::*;
 
     fn cfg(floor: bool) -> SceneConfig {
