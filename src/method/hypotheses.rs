@@ -48,6 +48,11 @@ pub fn hypotheses(
         .map(|sr| (sr, map.disc(sr.radius * body_height)));
     let height = rule_.height.map(|t| t.scaled(body_height));
     let facing_tolerance = rule_.facing_tolerance.unwrap_or(0.0);
+    // A direction across the surface (descent, facing) as the body's heading.
+    let turn = |d: f64| match orientation {
+        Orientation::Parallel => d,
+        Orientation::Orthogonal => d + std::f64::consts::FRAC_PI_2,
+    };
     // Only every `step`-th cell in x and y is tried (grid-aligned, so deterministic).
     let step = rule_
         .spacing
@@ -99,10 +104,6 @@ pub fn hypotheses(
                         .and_then(|(sr, shape)| shape.along(sr.elongation))
                         .map(|along| along + std::f64::consts::FRAC_PI_2)
                 });
-            let turn = |d: f64| match orientation {
-                Orientation::Parallel => d,
-                Orientation::Orthogonal => d + std::f64::consts::FRAC_PI_2,
-            };
             let facing =
                 away_from_highest(&band, ix, iy, &neighbourhood, mean, facing_tolerance).map(turn);
             // A descent that climbs towards the tallest top was turned round by a larger,
@@ -199,6 +200,45 @@ pub struct Rating {
     pub memberships: [f64; 3],
 }
 
+/// Count, sum, sum of squares and highest of a set of heights, metres: their mean and
+/// standard deviation (section 4.1's roughness).
+#[derive(Debug, Clone, Copy)]
+struct Moments {
+    n: usize,
+    sum: f64,
+    sum2: f64,
+    top: f64,
+}
+
+impl Default for Moments {
+    fn default() -> Self {
+        Moments {
+            n: 0,
+            sum: 0.0,
+            sum2: 0.0,
+            top: f64::MIN,
+        }
+    }
+}
+
+impl Moments {
+    fn add(&mut self, h: f64) {
+        self.n += 1;
+        self.sum += h;
+        self.sum2 += h * h;
+        self.top = self.top.max(h);
+    }
+
+    fn mean(&self) -> f64 {
+        self.sum / self.n as f64
+    }
+
+    fn spread(&self) -> f64 {
+        let mean = self.mean();
+        (self.sum2 / self.n as f64 - mean * mean).max(0.0).sqrt()
+    }
+}
+
 /// Rates cell `(ix, iy)` of `map` with the torso `template` (cell offsets) and the
 /// `height` set already in metres; `None` if the cell is invalid.
 ///
@@ -215,64 +255,52 @@ pub fn rate(
     height: Option<&Trapezoid>,
     rule_: &HypothesisRule,
 ) -> Option<Rating> {
-    map.height(ix as isize, iy as isize)?;
-    let (mut n, mut sum, mut sum2, mut top) = (0usize, 0.0, 0.0, f64::MIN);
+    let at = |dx: isize, dy: isize| map.height(ix as isize + dx, iy as isize + dy);
+    at(0, 0)?;
+    let mut all = Moments::default();
     for &(dx, dy) in template {
-        if let Some(h) = map.height(ix as isize + dx, iy as isize + dy) {
-            n += 1;
-            sum += h;
-            sum2 += h * h;
-            top = top.max(h);
+        if let Some(h) = at(dx, dy) {
+            all.add(h);
         }
     }
-    let spread = |n: usize, sum: f64, sum2: f64| {
-        let mean = sum / n as f64;
-        (mean, (sum2 / n as f64 - mean * mean).max(0.0).sqrt())
-    };
-    let (mut mean, mut roughness) = spread(n, sum, sum2);
-    if let Some(depth) = rule_.hole_depth {
-        if roughness > rule_.roughness.full {
-            let mut hs: Vec<f64> = template
-                .iter()
-                .filter_map(|&(dx, dy)| map.height(ix as isize + dx, iy as isize + dy))
-                .collect();
-            let mid = hs.len() / 2;
-            let (_, median, _) = hs.select_nth_unstable_by(mid, f64::total_cmp);
-            let (median, floor) = (*median, *median - depth);
-            let reach = template
-                .iter()
-                .map(|&(dx, dy)| dx.abs().max(dy.abs()))
-                .max()
-                .unwrap_or(0)
-                + 1;
-            let at = |dx: isize, dy: isize| map.height(ix as isize + dx, iy as isize + dy);
-            // A low cell is a gap when the surface goes on beyond it (a cell within
-            // `depth` of the median), seen from the place; past the surface's edge it does
-            // not, and the cell stays as roughness.
-            let enclosed = |dx: isize, dy: isize| {
-                let len = ((dx * dx + dy * dy) as f64).sqrt();
-                len == 0.0
-                    || (1..=reach).any(|k| {
-                        let t = 1.0 + k as f64 / len;
-                        let (x, y) = ((dx as f64 * t).round(), (dy as f64 * t).round());
-                        at(to_isize(x), to_isize(y)).is_some_and(|h| (h - median).abs() <= depth)
-                    })
-            };
-            let (mut m, mut s1, mut s2, mut t) = (0usize, 0.0, 0.0, f64::MIN);
-            for &(dx, dy) in template {
-                let Some(h) = at(dx, dy) else { continue };
-                if h < floor && enclosed(dx, dy) {
-                    continue;
-                }
-                m += 1;
-                s1 += h;
-                s2 += h * h;
-                t = t.max(h);
+    let mut kept = all;
+    if let Some(depth) = rule_
+        .hole_depth
+        .filter(|_| all.spread() > rule_.roughness.full)
+    {
+        let mut hs: Vec<f64> = template.iter().filter_map(|&(dx, dy)| at(dx, dy)).collect();
+        let mid = hs.len() / 2;
+        let (_, median, _) = hs.select_nth_unstable_by(mid, f64::total_cmp);
+        let (median, floor) = (*median, *median - depth);
+        // One cell past the template's farthest offset.
+        let reach = template
+            .iter()
+            .map(|&(dx, dy)| dx.abs().max(dy.abs()))
+            .max()
+            .unwrap_or(0)
+            + 1;
+        // A low cell is a gap when the surface goes on beyond it (a cell within `depth`
+        // of the median), seen from the place; past the surface's edge it does not, and
+        // the cell stays as roughness.
+        let enclosed = |dx: isize, dy: isize| {
+            let len = ((dx * dx + dy * dy) as f64).sqrt();
+            len == 0.0
+                || (1..=reach).any(|k| {
+                    let t = 1.0 + k as f64 / len;
+                    let (x, y) = ((dx as f64 * t).round(), (dy as f64 * t).round());
+                    at(to_isize(x), to_isize(y)).is_some_and(|h| (h - median).abs() <= depth)
+                })
+        };
+        kept = Moments::default();
+        for &(dx, dy) in template {
+            match at(dx, dy) {
+                Some(h) if h >= floor || !enclosed(dx, dy) => kept.add(h),
+                _ => {}
             }
-            (n, top) = (m, t);
-            (mean, roughness) = spread(m, s1, s2);
         }
     }
+    let Moments { n, top, .. } = kept;
+    let (mean, roughness) = (kept.mean(), kept.spread());
     let discontinuity = 1.0 - n as f64 / template.len() as f64;
     Some(Rating {
         mean,
