@@ -275,9 +275,13 @@ impl NodeContext<'_> {
         self.resting(&p, branch) != Rest::Free
     }
 
-    /// How the branch's support parts rest in `posture` as posed: on a seen surface
-    /// within `support_gap` below some part ([`Rest::Seen`]), else over a column where
-    /// the scan saw nothing within `unseen_reach` ([`Rest::Unseen`]), else not at all.
+    /// How the branch's support parts rest in `posture` as posed. Each support entry
+    /// (a link and a span of it) the branch moves is judged alone: on a seen surface when
+    /// some sample of its span has the scene within `support_gap` below it, else over a
+    /// column where the scan saw nothing within `unseen_reach`, else free. The branch
+    /// rests as its worst entry: [`Rest::Seen`] when every entry is seen, [`Rest::Free`]
+    /// when any is free, else [`Rest::Unseen`]. So two spans of one link (a forearm at
+    /// the elbow and further along) ask that the link rest along its length.
     fn resting(&self, p: &Posture, branch: &[usize]) -> Rest {
         let (agent, node, scene) = (self.agent, self.node, self.scene);
         let mine: Vec<(usize, [f64; 2])> = node
@@ -296,32 +300,39 @@ impl NodeContext<'_> {
         let mut frames = Vec::new();
         agent.forward_kinematics(self.place, p, &mut frames);
         let step = scene.voxel_size();
-        let mut samples = Vec::new();
-        for c in agent.cylinders(&frames, |j| mine.iter().any(|(l, _)| *l == j)) {
-            let [s0, s1] = mine
-                .iter()
-                .find(|(l, _)| *l == c.joint)
-                .map_or([0.0, 1.0], |m| m.1);
+        let gap = node.support_gap;
+        let cylinders = agent.cylinders(&frames, |j| mine.iter().any(|(l, _)| *l == j));
+        let mut worst = Rest::Seen;
+        for (link, [s0, s1]) in &mine {
+            let Some(c) = cylinders.iter().find(|c| c.joint == *link) else {
+                continue;
+            };
             let d = c.b - c.a;
             let n = to_usize(((d.norm() * (s1 - s0)) / step).ceil().max(1.0));
-            samples.extend(
-                (0..=n).map(|i| (c.a + d * (s0 + (s1 - s0) * i as f64 / n as f64), c.radius)),
-            );
+            let samples = (0..=n).map(|i| c.a + d * (s0 + (s1 - s0) * i as f64 / n as f64));
+            let on =
+                |q: &nalgebra::Point3<f64>| scene.drop_below(q, c.radius + gap) - c.radius <= gap;
+            let seen = match node.support_share {
+                None => samples.clone().any(|q| on(&q)),
+                Some(share) => {
+                    samples.clone().filter(|q| on(q)).count() as f64 >= share * (n + 1) as f64
+                }
+            };
+            let rest = if seen {
+                Rest::Seen
+            } else if node
+                .unseen_reach
+                .is_some_and(|reach| samples.clone().any(|q| !scene.sees_below(&q, reach)))
+            {
+                Rest::Unseen
+            } else {
+                return Rest::Free;
+            };
+            if rest == Rest::Unseen {
+                worst = Rest::Unseen;
+            }
         }
-        let gap = node.support_gap;
-        if samples
-            .iter()
-            .any(|(q, r)| scene.drop_below(q, r + gap) - r <= gap)
-        {
-            Rest::Seen
-        } else if node
-            .unseen_reach
-            .is_some_and(|reach| samples.iter().any(|(q, _)| !scene.sees_below(q, reach)))
-        {
-            Rest::Unseen
-        } else {
-            Rest::Free
-        }
+        worst
     }
 
     /// `fallback`: for a branch whose sweep found nothing, sets the node's fallback joints
@@ -577,11 +588,12 @@ impl NodeContext<'_> {
 enum Rest {
     /// The branch moves none of the node's support parts.
     NoParts,
-    /// Some part has a surface the scan saw within `support_gap` below it.
+    /// Every entry has a surface the scan saw within `support_gap` below it.
     Seen,
-    /// None has, but some part is over space the scan never saw (`unseen_reach`).
+    /// Every entry is seen or over space the scan never saw (`unseen_reach`), some the
+    /// latter.
     Unseen,
-    /// Neither: the parts hang over seen space with nothing below them.
+    /// Some entry hangs over seen space with nothing below it.
     Free,
 }
 
@@ -856,6 +868,46 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
                 held,
                 "{gap} m above the top"
             );
+        }
+    }
+
+    /// A bar 4 cm wide across the leg's way (x 0.30 to 0.34, along y), its top at
+    /// z = 0.45, on a leg of its own; points 1 cm apart.
+    fn bar_scene() -> Scene {
+        let mut pts = Vec::new();
+        for j in 0..=60 {
+            let y = -0.3 + j as f64 * 0.01;
+            for i in 0..=4 {
+                pts.push(Point3::new(0.30 + i as f64 * 0.01, y, 0.45));
+            }
+            for k in 0..45 {
+                pts.push(Point3::new(0.32, y, k as f64 * 0.01));
+            }
+        }
+        Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene)
+    }
+
+    #[test]
+    fn a_support_share_asks_the_link_to_rest_along_its_span() {
+        let (a, h) = models();
+        let mut node = h.nodes[0].clone();
+        // The leg's first 40 cm (x 0.15 to 0.55 when level), 3 cm above the top.
+        node.support = vec![(1, [0.0, 0.8])];
+        node.support_gap = 0.05;
+        let p = place(0.46 + 0.02 + 0.03);
+        for (scene, share, held) in [
+            (box_scene(), None, true),
+            (box_scene(), Some(0.5), true),
+            // The bar holds 4 of the 40 cm: one sample is enough, half is not.
+            (bar_scene(), None, true),
+            (bar_scene(), Some(0.5), false),
+            (bar_scene(), Some(0.05), true),
+        ] {
+            node.support_share = share;
+            let c = with(&a, &h, &scene, &p, &node);
+            let mut posture = a.rest_posture();
+            c.start(&mut posture);
+            assert_eq!(c.support(&posture, &[0], 0.5), held, "share {share:?}");
         }
     }
 

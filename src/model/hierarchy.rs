@@ -209,6 +209,11 @@ pub struct Node {
     pub support: Vec<(usize, [f64; 2])>,
     /// See `support`, metres.
     pub support_gap: f64,
+    /// Least share of each support entry's samples (along its span) that must have the
+    /// scene within `support_gap` below (an extension: an armrest carries the forearm
+    /// along its length, a chair back crossed at an angle only at one point). `None`:
+    /// one sample suffices.
+    pub support_share: Option<f64>,
     /// A support part over a column of space in which the scan saw nothing within this
     /// many metres (horizontally) of the vertical line below it is not refuted and counts
     /// as resting: a bed cut by the image edge, or whose far end the camera cannot see.
@@ -398,6 +403,8 @@ struct NodeFile {
     support: Vec<LinkRef>,
     #[serde(default)]
     support_gap: f64,
+    #[serde(default)]
+    support_share: Option<f64>,
     #[serde(default)]
     unseen_reach: Option<f64>,
     #[serde(default)]
@@ -962,6 +969,14 @@ fn resolve_node(
             })
         }
     };
+    if let Some(v) = n.support_share {
+        if !(v > 0.0 && v <= 1.0) {
+            return Err(src.invalid(
+                &key.key("support_share"),
+                format!("must be more than 0 and at most 1, not {v}"),
+            ));
+        }
+    }
     if let Some(r) = n.unseen_reach {
         // Beyond a body's width no gap in a scan is a place the body could rest on.
         if !(r > 0.0 && r <= 1.0) {
@@ -1126,6 +1141,7 @@ fn resolve_node(
         contact: n.contact,
         support,
         support_gap: n.support_gap,
+        support_share: n.support_share,
         unseen_reach: n.unseen_reach,
         beside,
     })
@@ -1569,6 +1585,25 @@ mod tests {
         names(&e, line, "node.armrest.beside.over", "unknown link `lap`");
         let (e, line) = edited(rule, "beside = { gap = 1.5, over = \"thigh_l\" }");
         names(&e, line, "node.armrest.beside.gap", "under 1 metre");
+    }
+
+    #[test]
+    fn a_bad_support_share_is_named() {
+        let rule = "support_share = 0.5";
+        assert_eq!(BUILTIN_SITTING.matches(rule).count(), 1);
+        let armrest = &load(BUILTIN_SITTING).unwrap().nodes[1];
+        assert_eq!(armrest.support_share, Some(0.5));
+        assert_eq!(armrest.support.len(), 2, "both forearms");
+        // Lying keeps one sample enough.
+        assert!(load(crate::model::set::BUILTIN_LYING)
+            .unwrap()
+            .nodes
+            .iter()
+            .all(|n| n.support_share.is_none()));
+        for bad in ["support_share = 0.0", "support_share = 1.5"] {
+            let (e, line) = edited(rule, bad);
+            names(&e, line, "node.armrest.support_share", "at most 1");
+        }
     }
 
     #[test]
