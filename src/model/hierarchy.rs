@@ -102,6 +102,10 @@ pub struct FitRule {
     pub fallback_yaw_step: f64,
     /// Height of the pelvis bottom above the highest cell under the template at the start, metres.
     pub start_clearance: f64,
+    /// Where the initial pose touches the scene at `start_clearance`, the start tried
+    /// instead, metres above the same cell (an extension: a table's underside over the
+    /// thighs of a chair pushed in); `None`: that heading is given up.
+    pub low_start: Option<f64>,
     /// Furthest the agent is lowered below the hypothesis height before it is given up, metres.
     pub max_drop: f64,
     /// sigma_d of Eq. 1, metres.
@@ -355,6 +359,8 @@ struct FitFile {
     yaw_offsets: Vec<f64>,
     fallback_yaw_step: f64,
     start_clearance: f64,
+    #[serde(default)]
+    low_start: Option<f64>,
     max_drop: f64,
     sigma_d: f64,
     min_stability: f64,
@@ -541,6 +547,7 @@ impl Hierarchy {
                 yaw_offsets: f.yaw_offsets.iter().map(|d| d.to_radians()).collect(),
                 fallback_yaw_step: f.fallback_yaw_step.to_radians(),
                 start_clearance: f.start_clearance,
+                low_start: f.low_start,
                 max_drop: f.max_drop,
                 sigma_d: f.sigma_d,
                 min_stability: f.min_stability,
@@ -728,6 +735,13 @@ fn check_limits(file: &File, src: Source) -> Result<(), ModelError> {
             0.0,
             2.0,
             "metres: the body starts just above the seat; the drop search grows with it",
+        ),
+        (
+            fit.key("low_start"),
+            f.low_start.unwrap_or(0.0),
+            0.0,
+            f.start_clearance,
+            "metres: between the seat and `start_clearance`",
         ),
         (
             fit.key("max_drop"),
