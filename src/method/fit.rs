@@ -250,6 +250,11 @@ mod tests {
                 ));
             }
         }
+        scene_of(pts)
+    }
+
+    /// The scene of `pts`: 2 cm voxels over a solid floor.
+    fn scene_of(pts: Vec<Point3<f64>>) -> Scene {
         Scene::new(
             &PointCloud::new(pts),
             &SceneConfig {
@@ -258,6 +263,38 @@ mod tests {
                 field_margin: 0.3,
             },
         )
+    }
+
+    /// A place over the middle of `seat()`, heading +x.
+    fn over_the_seat() -> Hypothesis {
+        Hypothesis {
+            cell: (0, 0),
+            position: Point3::new(0.0, 0.0, 0.45),
+            top: 0.45,
+            availability: 1.0,
+            heading: Some(0.0),
+            facing: None,
+            memberships: [1.0; 3],
+        }
+    }
+
+    /// The fits at [`over_the_seat`] in `s`, contact to 5 mm.
+    fn fit_over_the_seat(a: &Agent, h: &Hierarchy, s: &Scene) -> Vec<Fit> {
+        fit(
+            a,
+            h,
+            s,
+            &over_the_seat(),
+            &ContactConfig { resolution: 0.005 },
+        )
+    }
+
+    /// The height of the pelvis's lowest point in fit `f`, metres.
+    fn pelvis_bottom(a: &Agent, f: &Fit) -> f64 {
+        let mut frames = Vec::new();
+        a.forward_kinematics(&f.placement, &f.posture, &mut frames);
+        let pelvis = a.cylinders(&frames, |j| j == 0)[0];
+        pelvis.a.z - pelvis.radius
     }
 
     /// Eq. 1 with the pelvis bottom `gap` metres above the seat's voxels.
@@ -314,31 +351,12 @@ mod tests {
                 }
             }
         }
-        let s = Scene::new(
-            &PointCloud::new(pts),
-            &SceneConfig {
-                voxel_size: 0.02,
-                floor: true,
-                field_margin: 0.3,
-            },
-        );
-        let hyp = Hypothesis {
-            cell: (0, 0),
-            position: Point3::new(0.0, 0.0, 0.45),
-            top: 0.45,
-            availability: 1.0,
-            heading: Some(0.0),
-            facing: None,
-            memberships: [1.0; 3],
-        };
-        let fits = fit(&a, &h, &s, &hyp, &ContactConfig { resolution: 0.005 });
+        let s = scene_of(pts);
+        let fits = fit_over_the_seat(&a, &h, &s);
         let facing = fits.iter().find(|f| f.placement.yaw.abs() < 1e-9);
         let f = facing.expect("a fit facing the table");
         assert!(!f.turned);
-        let mut frames = Vec::new();
-        a.forward_kinematics(&f.placement, &f.posture, &mut frames);
-        let pelvis = a.cylinders(&frames, |j| j == 0)[0];
-        let bottom = pelvis.a.z - pelvis.radius;
+        let bottom = pelvis_bottom(&a, f);
         assert!(
             (0.455..=0.47).contains(&bottom),
             "pelvis bottom at {bottom}"
@@ -349,26 +367,14 @@ mod tests {
     fn the_agent_is_lowered_onto_the_seat() {
         let (a, h) = models();
         let s = seat();
-        let hyp = Hypothesis {
-            cell: (0, 0),
-            position: Point3::new(0.0, 0.0, 0.45),
-            top: 0.45,
-            availability: 1.0,
-            heading: Some(0.0),
-            facing: None,
-            memberships: [1.0; 3],
-        };
-        let fits = fit(&a, &h, &s, &hyp, &ContactConfig { resolution: 0.005 });
+        let fits = fit_over_the_seat(&a, &h, &s);
         assert_eq!(
             fits.len(),
             h.fit.yaw_offsets.len(),
             "every heading is free and stable on a flat seat"
         );
         let f = &fits[0];
-        let mut frames = Vec::new();
-        a.forward_kinematics(&f.placement, &f.posture, &mut frames);
-        let pelvis = a.cylinders(&frames, |j| j == 0)[0];
-        let bottom = pelvis.a.z - pelvis.radius;
+        let bottom = pelvis_bottom(&a, f);
         // The seat's voxels end at 0.46 m; contact is located to 5 mm.
         assert!(
             (0.455..=0.47).contains(&bottom),
