@@ -147,12 +147,15 @@ pub struct Prepared {
     pub scene: Scene,
 }
 
-/// Builds the height map and the voxelised scene once for a cloud.
+/// Builds the height map and the voxelised scene once for a cloud. The two are
+/// independent (each reads only `cloud` and its own config), so they are built side by
+/// side on rayon's pool: the same grids whatever the thread count.
 pub fn prepare(cloud: &PointCloud, cfg: &DetectConfig) -> Prepared {
-    Prepared {
-        map: HeightMap::from_cloud(cloud, &cfg.heightmap),
-        scene: Scene::new(cloud, &cfg.scene),
-    }
+    let (map, scene) = rayon::join(
+        || HeightMap::from_cloud(cloud, &cfg.heightmap),
+        || Scene::new(cloud, &cfg.scene),
+    );
+    Prepared { map, scene }
 }
 
 /// The best unfolded pose at one hypothesis whose root affordance is present, with the
