@@ -1401,7 +1401,10 @@ mod dense {
             }
         }
 
-        /// The distance (metres) at offsets `o` (inside the box).
+        /// The distance (metres) at offsets `o` (inside the box). Inlined into the
+        /// field's reads, the hot path of the contact search (left to itself, the
+        /// compiler's choice follows how the crate is split into codegen units).
+        #[inline]
         pub(super) fn get(&self, o: [usize; 3]) -> f32 {
             let (tx, ty) = (o[0] / TILE, o[1] / TILE);
             let tile = self.tiles[ty * self.tiles_x + tx].get_or_init(|| self.tile(tx, ty));
