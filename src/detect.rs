@@ -2,6 +2,7 @@
 //! unfolding, selection and segmentation.
 
 use std::path::Path;
+use std::sync::OnceLock;
 
 use nalgebra::Point3;
 use rayon::prelude::*;
@@ -12,7 +13,7 @@ use crate::method::fit::{fit, ContactConfig, Fit};
 use crate::method::heightmap::{HeightMap, HeightMapConfig};
 use crate::method::hypotheses::{hypotheses, Hypothesis};
 use crate::method::scene::{Scene, SceneConfig};
-use crate::method::select::{segment, suppress, SegmentConfig};
+use crate::method::select::{segment_in, suppress, SegmentConfig, SegmentGrid};
 use crate::method::unfold::{unfold, Unfolded};
 use crate::model::agent::{Agent, Cylinder};
 use crate::model::hierarchy::Hierarchy;
@@ -147,12 +148,15 @@ pub struct Prepared {
     pub scene: Scene,
 }
 
-/// Builds the height map and the voxelised scene once for a cloud.
+/// Builds the height map and the voxelised scene once for a cloud. The two are
+/// independent (each reads only `cloud` and its own config), so they are built side by
+/// side on rayon's pool: the same grids whatever the thread count.
 pub fn prepare(cloud: &PointCloud, cfg: &DetectConfig) -> Prepared {
-    Prepared {
-        map: HeightMap::from_cloud(cloud, &cfg.heightmap),
-        scene: Scene::new(cloud, &cfg.scene),
-    }
+    let (map, scene) = rayon::join(
+        || HeightMap::from_cloud(cloud, &cfg.heightmap),
+        || Scene::new(cloud, &cfg.scene),
+    );
+    Prepared { map, scene }
 }
 
 /// The best unfolded pose at one hypothesis whose root affordance is present, with the
@@ -227,9 +231,12 @@ pub fn detect_all_prepared(
     models: &[Model],
     cfg: &DetectConfig,
 ) -> Vec<Outcome> {
+    // The segmentation's cells depend on the cloud and `cfg.segment` only: built once,
+    // when the first model with a detection needs them.
+    let grid = OnceLock::new();
     models
         .iter()
-        .map(|m| detect_prepared(cloud, prepared, &m.agent, &m.hierarchy, cfg))
+        .map(|m| detect_prepared_in(cloud, prepared, &m.agent, &m.hierarchy, cfg, &grid))
         .collect()
 }
 
@@ -240,6 +247,19 @@ pub fn detect_prepared(
     agent: &Agent,
     h: &Hierarchy,
     cfg: &DetectConfig,
+) -> Outcome {
+    detect_prepared_in(cloud, prepared, agent, h, cfg, &OnceLock::new())
+}
+
+/// [`detect_prepared`], segmenting over the cells in `grid` (built from `cloud` and
+/// `cfg.segment` if not yet there, and only if some detection needs it).
+fn detect_prepared_in(
+    cloud: &PointCloud,
+    prepared: &Prepared,
+    agent: &Agent,
+    h: &Hierarchy,
+    cfg: &DetectConfig,
+    grid: &OnceLock<SegmentGrid>,
 ) -> Outcome {
     let hyps = hypotheses(&prepared.map, &h.hypothesis, h.orientation, agent.height);
     let results: Vec<(Option<Unfolded>, usize)> = hyps
@@ -273,7 +293,12 @@ pub fn detect_prepared(
         })
         .collect();
     let seeds: Vec<Point3<f64>> = detections.iter().map(|d| d.seat).collect();
-    let labels = segment(cloud, &seeds, &cfg.segment);
+    let labels = if seeds.is_empty() {
+        vec![None; cloud.len()]
+    } else {
+        let grid = grid.get_or_init(|| SegmentGrid::new(cloud, &cfg.segment));
+        segment_in(grid, cloud, &seeds, &cfg.segment)
+    };
     for l in labels.iter().flatten() {
         detections[*l].segment_points += 1;
     }

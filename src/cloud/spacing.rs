@@ -7,6 +7,7 @@
 //! centimetres use it to tell a hole in a surface from a gap between samples.
 
 use nalgebra::Point3;
+use rayon::prelude::*;
 
 use super::PointCloud;
 use crate::cellhash::{CellMap, CellSet};
@@ -221,33 +222,39 @@ impl TileSpacing {
         // The K-th nearest neighbour of each query among its tile's points; a tile of few
         // points (a sparse patch, whose edge queries would find their neighbours farther
         // inside the tile than across its border) looks in the 26 tiles round it too.
-        let mut near: Vec<Point3<f64>> = Vec::new();
-        for (k, m) in &members {
-            if m.len() <= K {
-                continue;
-            }
-            near.clear();
-            // Where the tile's own points start in `near`.
-            let mut own = 0;
-            if m.len() < FEW_IN_TILE {
-                for o in neighbourhood() {
-                    if let Some(n) = members.get(&[k[0] + o[0], k[1] + o[1], k[2] + o[2]]) {
-                        if o == [0, 0, 0] {
-                            own = near.len();
+        // Each tile's value depends on the points only, so the tiles are measured in
+        // parallel and the values inserted in the map's order, as one by one.
+        let tiles: Vec<(&[i64; 3], &Vec<usize>)> =
+            members.iter().filter(|(_, m)| m.len() > K).collect();
+        let values: Vec<f64> = tiles
+            .par_iter()
+            .map_init(Vec::new, |near: &mut Vec<Point3<f64>>, &(k, m)| {
+                near.clear();
+                // Where the tile's own points start in `near`.
+                let mut own = 0;
+                if m.len() < FEW_IN_TILE {
+                    for o in neighbourhood() {
+                        if let Some(n) = members.get(&[k[0] + o[0], k[1] + o[1], k[2] + o[2]]) {
+                            if o == [0, 0, 0] {
+                                own = near.len();
+                            }
+                            near.extend(n.iter().map(|&j| cloud.points[j]));
                         }
-                        near.extend(n.iter().map(|&j| cloud.points[j]));
                     }
+                } else {
+                    near.extend(m.iter().map(|&j| cloud.points[j]));
                 }
-            } else {
-                near.extend(m.iter().map(|&j| cloud.points[j]));
-            }
-            let step = m.len().div_ceil(queries.max(1));
-            let mut kth: Vec<f64> = (0..m.len())
-                .step_by(step)
-                .map(|q| kth_nearest_of(&near, own + q))
-                .collect();
-            kth.sort_by(f64::total_cmp);
-            out.values.insert(*k, kth[(kth.len() - 1) / 2]);
+                let step = m.len().div_ceil(queries.max(1));
+                let mut kth: Vec<f64> = (0..m.len())
+                    .step_by(step)
+                    .map(|q| kth_nearest_of(near, own + q))
+                    .collect();
+                kth.sort_by(f64::total_cmp);
+                kth[(kth.len() - 1) / 2]
+            })
+            .collect();
+        for (&(k, _), v) in tiles.iter().zip(values) {
+            out.values.insert(*k, v);
         }
         out
     }

@@ -10,6 +10,7 @@
 use crate::cloud::{point_spacing, PointCloud, TileSpacing};
 use crate::num::{to_isize, to_usize};
 use nalgebra::Point3;
+use rayon::prelude::*;
 
 /// How the height map is built. Defaults carry their reasons.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -223,8 +224,11 @@ impl HeightMap {
         };
         let nx = to_usize(((hi.x - lo.x) / cell).floor()) + 1;
         let ny = to_usize(((hi.y - lo.y) / cell).floor()) + 1;
-        let global = point_spacing(cloud);
-        let tiles = TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries);
+        // Independent measures of the same points, side by side.
+        let (global, tiles) = rayon::join(
+            || point_spacing(cloud),
+            || TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries),
+        );
         // How far each point reaches: its tile's spacing, at least the cloud's (looked up
         // once, for the passes below).
         let reaches: Vec<f64> = tiles
@@ -326,11 +330,29 @@ impl HeightMap {
             }
         }
         drop(fill);
-        for (c, h) in map.heights.iter_mut().enumerate() {
-            let column = &mut zs[start[c]..start[c + 1]];
-            column.sort_unstable_by(f64::total_cmp);
-            *h = stack_top(column, cfg);
+        // Each cell's top from its own column: tile by tile in parallel (a tile's cells
+        // and their columns are contiguous), the same values as cell by cell.
+        let cells_per_tile = TILE * TILE;
+        let mut jobs = Vec::with_capacity(map.heights.len() / cells_per_tile);
+        let mut rest: &mut [f64] = &mut zs;
+        for (t, hs) in map.heights.chunks_mut(cells_per_tile).enumerate() {
+            let (from, to) = (
+                start[t * cells_per_tile],
+                start[t * cells_per_tile + hs.len()],
+            );
+            let (mine, after) = std::mem::take(&mut rest).split_at_mut(to - from);
+            rest = after;
+            jobs.push((t * cells_per_tile, hs, mine));
         }
+        jobs.into_par_iter().for_each(|(c0, hs, column_zs)| {
+            let base = start[c0];
+            for (k, h) in hs.iter_mut().enumerate() {
+                let c = c0 + k;
+                let column = &mut column_zs[start[c] - base..start[c + 1] - base];
+                column.sort_unstable_by(f64::total_cmp);
+                *h = stack_top(column, cfg);
+            }
+        });
         map
     }
 
@@ -659,8 +681,11 @@ mod tests {
         let cell = cfg.cell;
         let nx = to_usize(((hi.x - lo.x) / cell).floor()) + 1;
         let ny = to_usize(((hi.y - lo.y) / cell).floor()) + 1;
-        let global = point_spacing(cloud);
-        let tiles = TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries);
+        // Independent measures of the same points, side by side.
+        let (global, tiles) = rayon::join(
+            || point_spacing(cloud),
+            || TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries),
+        );
         let mut columns: Vec<Vec<f64>> = vec![Vec::new(); nx * ny];
         for p in &cloud.points {
             let reach = global.map_or(0.0, |g| {

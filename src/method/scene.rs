@@ -753,9 +753,108 @@ fn occupied_keys(cloud: &PointCloud, origin: Vector3<f64>, v: f64) -> Vec<[i64; 
             keys.push(k);
         }
     }
-    keys.sort_unstable();
+    sort_keys(&mut keys);
     keys.dedup();
     keys
+}
+
+/// Fewest keys [`sort_keys`] sorts by radix: below this the passes over the buckets cost
+/// more than a comparison sort (2^11 buckets a pass).
+const RADIX_MIN_KEYS: usize = 1 << 12;
+/// Bits of a packed key sorted per radix pass: 2^11 counts (16 KiB) stay in the L1 cache.
+const RADIX_BITS: u32 = 11;
+
+/// Sorts voxel keys lexicographically (x, then y, then z), as `sort_unstable` does.
+///
+/// When the keys' spans along the three axes fit 64 bits together, each key is packed
+/// into a `u64` (its offsets from the least key along each axis, x in the high bits, z in
+/// the low bits), whose order is the keys' lexicographic order, and the packed keys are
+/// sorted by a least-significant-digit radix sort ([`RADIX_BITS`] a pass, only as many
+/// passes as the packed keys have bits) and unpacked in place; equal keys pack alike, so
+/// the result is the same sequence as `sort_unstable`'s (test
+/// `sort_keys_equals_sort_unstable`). Fewer than [`RADIX_MIN_KEYS`] keys, or spans over 64
+/// bits, are sorted by `sort_unstable`.
+fn sort_keys(keys: &mut [[i64; 3]]) {
+    if keys.len() < RADIX_MIN_KEYS {
+        keys.sort_unstable();
+        return;
+    }
+    let mut lo = [i64::MAX; 3];
+    let mut hi = [i64::MIN; 3];
+    for k in keys.iter() {
+        for a in 0..3 {
+            lo[a] = lo[a].min(k[a]);
+            hi[a] = hi[a].max(k[a]);
+        }
+    }
+    // The span `hi - lo` is below 2^64, so the wrapping difference read as u64 is it.
+    let offset = |k: &[i64; 3], a: usize| k[a].wrapping_sub(lo[a]).cast_unsigned();
+    let bits = [0, 1, 2].map(|a| u64::BITS - offset(&hi, a).leading_zeros());
+    let total = bits[0] + bits[1] + bits[2];
+    if total > u64::BITS {
+        keys.sort_unstable();
+        return;
+    }
+    let (shift_x, shift_y) = (bits[1] + bits[2], bits[2]);
+    // A shift of 64 only meets an offset of 0 bits, which is 0.
+    let shl = |x: u64, s: u32| x.checked_shl(s).unwrap_or(0);
+    let mut packed: Vec<u64> = keys
+        .iter()
+        .map(|k| shl(offset(k, 0), shift_x) | shl(offset(k, 1), shift_y) | offset(k, 2))
+        .collect();
+    radix_sort(&mut packed, total);
+    let mask = |b: u32| shl(1, b).wrapping_sub(1);
+    let (mx, my, mz) = (mask(bits[0]), mask(bits[1]), mask(bits[2]));
+    let unshr = |x: u64, s: u32| x.checked_shr(s).unwrap_or(0);
+    for (k, &p) in keys.iter_mut().zip(&packed) {
+        *k = [
+            lo[0].wrapping_add_unsigned(unshr(p, shift_x) & mx),
+            lo[1].wrapping_add_unsigned(unshr(p, shift_y) & my),
+            lo[2].wrapping_add_unsigned(p & mz),
+        ];
+    }
+}
+
+/// Sorts `values`, all below 2^`bits`, ascending: a stable least-significant-digit radix
+/// sort, [`RADIX_BITS`] bits a pass, with one buffer as large as `values`.
+fn radix_sort(values: &mut Vec<u64>, bits: u32) {
+    let passes = bits.div_ceil(RADIX_BITS);
+    if passes == 0 || values.len() < 2 {
+        return;
+    }
+    let buckets = 1usize << RADIX_BITS;
+    let mask = (buckets - 1) as u64;
+    // A digit is below 2^RADIX_BITS, so it fits `usize` everywhere.
+    let digit = |v: u64, pass: u32| usize::try_from(v >> (pass * RADIX_BITS) & mask).unwrap_or(0);
+    // Every pass's counts from one read.
+    let mut counts = vec![0usize; buckets * passes as usize];
+    for &v in values.iter() {
+        for pass in 0..passes {
+            counts[pass as usize * buckets + digit(v, pass)] += 1;
+        }
+    }
+    let mut from = std::mem::take(values);
+    let mut to = vec![0u64; from.len()];
+    for pass in 0..passes {
+        let count = &mut counts[pass as usize * buckets..(pass as usize + 1) * buckets];
+        if count.contains(&from.len()) {
+            // Every value has this digit: the pass would not move one.
+            continue;
+        }
+        let mut next = 0;
+        for c in count.iter_mut() {
+            let n = *c;
+            *c = next;
+            next += n;
+        }
+        for &v in &from {
+            let d = digit(v, pass);
+            to[count[d]] = v;
+            count[d] += 1;
+        }
+        std::mem::swap(&mut from, &mut to);
+    }
+    *values = from;
 }
 
 /// Height of the lowest point of a cylinder above z = 0, metres (negative below the floor).
@@ -1302,7 +1401,10 @@ mod dense {
             }
         }
 
-        /// The distance (metres) at offsets `o` (inside the box).
+        /// The distance (metres) at offsets `o` (inside the box). Inlined into the
+        /// field's reads, the hot path of the contact search (left to itself, the
+        /// compiler's choice follows how the crate is split into codegen units).
+        #[inline]
         pub(super) fn get(&self, o: [usize; 3]) -> f32 {
             let (tx, ty) = (o[0] / TILE, o[1] / TILE);
             let tile = self.tiles[ty * self.tiles_x + tx].get_or_init(|| self.tile(tx, ty));
@@ -1491,6 +1593,73 @@ mod tests {
             assert_eq!(occupied_keys(&cloud, origin, v), want, "{round}");
         }
     }
+    /// `sort_keys` against `sort_unstable` on seeded key sets: small and large sets, narrow
+    /// and wide spans (up to exactly 64 bits together, and past them), negative keys,
+    /// repeats, and keys at the ends of `i64`.
+    #[test]
+    fn sort_keys_equals_sort_unstable() {
+        let mut state = 11u64;
+        let next = |state: &mut u64| {
+            *state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            *state >> 11
+        };
+        for round in 0..120 {
+            let n = [10, 5000, 20_000][round % 3];
+            // Bits of span per axis: narrow, room-sized, 64 together, over 64.
+            let bits: [u32; 3] = match round % 6 {
+                0 => [3, 4, 2],
+                1 => [9, 9, 8],
+                2 => [22, 21, 21],
+                3 => [30, 20, 14],
+                4 => [40, 20, 10],
+                _ => [63, 63, 63],
+            };
+            let base = [
+                i64::try_from(next(&mut state) % 1000).unwrap_or(0) - 500,
+                -7,
+                if round % 5 == 0 { i64::MIN } else { 3 },
+            ];
+            let mut keys: Vec<[i64; 3]> = (0..n)
+                .map(|_| {
+                    [0, 1, 2].map(|a| {
+                        let span = 1u64 << bits[a].min(62);
+                        base[a].wrapping_add_unsigned(next(&mut state) % span)
+                    })
+                })
+                .collect();
+            for i in 0..n / 10 {
+                let j = usize::try_from(next(&mut state)).unwrap_or(0) % n;
+                keys[i] = keys[j];
+            }
+            if round % 4 == 0 {
+                keys.push([i64::MAX, 0, 0]);
+            }
+            let mut want = keys.clone();
+            want.sort_unstable();
+            sort_keys(&mut keys);
+            assert_eq!(keys, want, "{round}");
+        }
+        // Spans that fill 64 bits exactly, with keys at both ends of every axis.
+        let mut keys: Vec<[i64; 3]> = (0..RADIX_MIN_KEYS as i64 * 2)
+            .map(|i| [(i * 7919) % 1_000_000, -(i % 65_536), (i * 31) % 1_000_003])
+            .collect();
+        keys.push([0, -65_535, 0]);
+        keys.push([(1 << 23) - 1, 0, (1 << 25) - 1]);
+        let mut want = keys.clone();
+        want.sort_unstable();
+        sort_keys(&mut keys);
+        assert_eq!(keys, want);
+        let mut values: Vec<u64> = (0..10_000u64)
+            .map(|i| i.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+            .collect();
+        let mut want = values.clone();
+        want.sort_unstable();
+        radix_sort(&mut values, 64);
+        assert_eq!(values, want);
+    }
+
     use dense::*;
 
     fn cfg(floor: bool) -> SceneConfig {

@@ -58,19 +58,56 @@ pub fn segment(
     seeds: &[Point3<f64>],
     cfg: &SegmentConfig,
 ) -> Vec<Option<usize>> {
+    if seeds.is_empty() {
+        return vec![None; cloud.len()];
+    }
+    segment_in(&SegmentGrid::new(cloud, cfg), cloud, seeds, cfg)
+}
+
+/// The cells of [`segment`] for one cloud and one configuration, built once and shared by
+/// the segmentations of several sets of seeds (each hierarchy's detections): a
+/// segmentation copies only the per-cell counts and the flat array it takes points from.
+pub struct SegmentGrid {
+    /// Cell edge, metres (`grow_distance`, at least 1e-6).
+    cell: f64,
+    /// The cells as built, before any point is taken.
+    index: CellIndex,
+}
+
+impl SegmentGrid {
+    /// The cells of the points of `cloud` (world frame, metres) at least
+    /// `cfg.floor_height` high, of edge `cfg.grow_distance`.
+    pub fn new(cloud: &PointCloud, cfg: &SegmentConfig) -> SegmentGrid {
+        let cell = cfg.grow_distance.max(1e-6);
+        let index = CellIndex::new(cloud, cfg.floor_height, &|p| cell_key(p, cell));
+        SegmentGrid { cell, index }
+    }
+}
+
+/// The cell (of edge `cell` metres) holding `p`.
+fn cell_key(p: &Point3<f64>, cell: f64) -> (i64, i64, i64) {
+    (
+        floor_i64(p.x / cell),
+        floor_i64(p.y / cell),
+        floor_i64(p.z / cell),
+    )
+}
+
+/// [`segment`] over the cells `grid` built for `cloud` and `cfg` (the same labels as
+/// [`segment`]: the grid is only read and copied).
+pub fn segment_in(
+    grid: &SegmentGrid,
+    cloud: &PointCloud,
+    seeds: &[Point3<f64>],
+    cfg: &SegmentConfig,
+) -> Vec<Option<usize>> {
     let mut label: Vec<Option<usize>> = vec![None; cloud.len()];
     if seeds.is_empty() {
         return label;
     }
-    let cell = cfg.grow_distance.max(1e-6);
-    let key = |p: &Point3<f64>| {
-        (
-            floor_i64(p.x / cell),
-            floor_i64(p.y / cell),
-            floor_i64(p.z / cell),
-        )
-    };
-    let mut grid = CellGrid::new(cloud, cfg.floor_height, &key);
+    let cell = grid.cell;
+    let key = |p: &Point3<f64>| cell_key(p, cell);
+    let mut grid = CellGrid::new(&grid.index);
     let r2 = cfg.grow_distance * cfg.grow_distance;
     // Taken points not yet grown from, with their cells.
     let mut queue: Vec<(usize, u32)> = Vec::new();
@@ -81,7 +118,7 @@ pub fn segment(
         for dz in -reach..=reach {
             for dy in -reach..=reach {
                 for dx in -reach..=reach {
-                    if let Some(&c) = grid.ids.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
+                    if let Some(&c) = grid.index.ids.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
                         grid.take(c, &cloud.points, &mut label, s, &mut queue, |q| {
                             (q - seed).norm() <= cfg.seed_radius
                         });
@@ -95,13 +132,23 @@ pub fn segment(
                 break;
             }
             let p = cloud.points[i];
+            // A neighbourhood found with no untaken point stays so (cells only lose
+            // points), so its cells are not visited again; an empty cell takes nothing.
+            let Some((slot, around)) = grid.neighbours(c, &cloud.points, &key) else {
+                continue;
+            };
             let before = queue.len();
-            for n in grid.neighbours(c, &cloud.points, &key) {
-                if n != NO_CELL {
+            let mut left = false;
+            for n in around {
+                if n != NO_CELL && grid.live[n as usize] != 0 {
                     grid.take(n, &cloud.points, &mut label, s, &mut queue, |q| {
                         (q - p).norm_squared() <= r2
                     });
+                    left |= grid.live[n as usize] != 0;
                 }
+            }
+            if !left {
+                grid.drained[slot] = true;
             }
             taken += queue.len() - before;
         }
@@ -113,27 +160,22 @@ pub fn segment(
 const NO_CELL: u32 = u32::MAX;
 
 /// The points of [`segment`] (those at least the floor height high) sorted by cubic cell,
-/// each cell's untaken points in one run of a flat array, by index.
-struct CellGrid {
+/// each cell's points in one run of a flat array, by index, before any is taken.
+struct CellIndex {
     /// Cell key (cell coordinates) to cell id, ids in order of the cells' first points.
     ids: CellMap<(i64, i64, i64), u32>,
     /// Each cell's first point (an index into the cloud), whose key is the cell's, by id.
     first: Vec<u32>,
     /// Each cell's first entry in `entries`, by id.
     start: Vec<u32>,
-    /// How many of a cell's entries are untaken (the first ones of its run), by id.
-    live: Vec<u32>,
+    /// Each cell's number of points, by id.
+    count: Vec<u32>,
     /// Indices of the points in the cloud, by cell, in index order within a cell (`u32`,
-    /// half the memory of `usize`; see [`CellGrid::new`]).
+    /// half the memory of `usize`; see [`CellIndex::new`]).
     entries: Vec<u32>,
-    /// A cell's index in `table` once its neighbours were looked up, else [`NO_CELL`].
-    slot: Vec<u32>,
-    /// The 27 cells around a cell (offsets in z, then y, then x, each from −1 to 1), by
-    /// slot; [`NO_CELL`] where no point is.
-    table: Vec<[u32; 27]>,
 }
 
-impl CellGrid {
+impl CellIndex {
     /// The cells of the points of `cloud` at least `floor_height` high, by `key`.
     ///
     /// Cell ids and point indices are `u32`: a cloud has fewer cells than points, and 2^32
@@ -173,34 +215,64 @@ impl CellGrid {
                 *f += 1;
             }
         }
-        CellGrid {
+        CellIndex {
             ids,
-            slot: vec![NO_CELL; first.len()],
             first,
             start,
-            live: count,
+            count,
             entries,
+        }
+    }
+}
+
+/// One segmentation's view of a [`CellIndex`]: each cell's untaken points the first ones
+/// of its run.
+struct CellGrid<'a> {
+    /// The cells before any point was taken.
+    index: &'a CellIndex,
+    /// How many of a cell's entries are untaken (the first ones of its run), by id.
+    live: Vec<u32>,
+    /// The index's entries, each cell's run compacted as its points are taken.
+    entries: Vec<u32>,
+    /// A cell's index in `table` once its neighbours were looked up, else [`NO_CELL`].
+    slot: Vec<u32>,
+    /// The 27 cells around a cell (offsets in z, then y, then x, each from −1 to 1), by
+    /// slot; [`NO_CELL`] where no point is.
+    table: Vec<[u32; 27]>,
+    /// By slot, whether all 27 cells were found with no untaken point.
+    drained: Vec<bool>,
+}
+
+impl<'a> CellGrid<'a> {
+    /// The cells of `index` with no point taken.
+    fn new(index: &'a CellIndex) -> Self {
+        CellGrid {
+            index,
+            live: index.count.clone(),
+            entries: index.entries.clone(),
+            slot: vec![NO_CELL; index.first.len()],
             table: Vec::new(),
+            drained: Vec::new(),
         }
     }
 
-    /// The 27 cells around cell `c` (see `table`) of the grid of `points` by `key`, looked
-    /// up once per cell.
+    /// The slot and the 27 cells around cell `c` (see `table`) of the grid of `points` by
+    /// `key`, looked up once per cell; `None` once they are `drained`.
     fn neighbours(
         &mut self,
         c: u32,
         points: &[Point3<f64>],
         key: &impl Fn(&Point3<f64>) -> (i64, i64, i64),
-    ) -> [u32; 27] {
+    ) -> Option<(usize, [u32; 27])> {
         let c = c as usize;
         if self.slot[c] == NO_CELL {
-            let k = key(&points[self.first[c] as usize]);
+            let k = key(&points[self.index.first[c] as usize]);
             let mut around = [NO_CELL; 27];
             let mut n = 0;
             for dz in -1..=1 {
                 for dy in -1..=1 {
                     for dx in -1..=1 {
-                        if let Some(&id) = self.ids.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
+                        if let Some(&id) = self.index.ids.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
                             around[n] = id;
                         }
                         n += 1;
@@ -209,8 +281,10 @@ impl CellGrid {
             }
             self.slot[c] = index32(self.table.len());
             self.table.push(around);
+            self.drained.push(false);
         }
-        self.table[self.slot[c] as usize]
+        let slot = self.slot[c] as usize;
+        (!self.drained[slot]).then(|| (slot, self.table[slot]))
     }
 
     /// Takes for seed `s` the untaken points of cell `c` (of `points`) that pass `near`, in
@@ -225,7 +299,7 @@ impl CellGrid {
         queue: &mut Vec<(usize, u32)>,
         near: impl Fn(Point3<f64>) -> bool,
     ) {
-        let from = self.start[c as usize] as usize;
+        let from = self.index.start[c as usize] as usize;
         let to = from + self.live[c as usize] as usize;
         let mut kept = from;
         for e in from..to {
@@ -328,7 +402,8 @@ mod tests {
     /// patches and rods of different spacings (around the growing distance, so segments
     /// both leak and stop), loose points, points under the floor height and points with a
     /// NaN coordinate; one to five seeds, some on the same patch, and caps from a few
-    /// points (cut off mid-growth, where the order of taking decides) to none.
+    /// points (cut off mid-growth, where the order of taking decides) to none; and
+    /// [`segment_in`] over one grid for two sets of seeds in turn.
     #[test]
     fn segment_equals_the_reference() {
         use rand::{RngExt, SeedableRng};
@@ -395,6 +470,24 @@ mod tests {
             };
             let want = segment_reference(&cloud, &seeds, &cfg);
             assert_eq!(segment(&cloud, &seeds, &cfg), want, "round {round}");
+            // One grid shared by two segmentations (as the hierarchies of a run share
+            // it): each gives the labels of its own seeds, whichever ran first.
+            let grid = SegmentGrid::new(&cloud, &cfg);
+            let others: Vec<Point3<f64>> = seeds
+                .iter()
+                .rev()
+                .map(|p| p + Vector3::x() * 0.01)
+                .collect();
+            assert_eq!(
+                segment_in(&grid, &cloud, &others, &cfg),
+                segment_reference(&cloud, &others, &cfg),
+                "round {round}"
+            );
+            assert_eq!(
+                segment_in(&grid, &cloud, &seeds, &cfg),
+                want,
+                "round {round}"
+            );
             taken_total += want.iter().flatten().count();
             capped += (0..seeds.len())
                 .filter(|&s| want.iter().filter(|&&l| l == Some(s)).count() >= cfg.max_points)
