@@ -147,6 +147,8 @@ fn fit_headings(
     let bottom = if bottom.is_finite() { bottom } else { 0.0 };
     let start_z = hyp.top + h.fit.start_clearance - bottom;
     let drop = (hyp.top - hyp.position.z) + h.fit.start_clearance + h.fit.max_drop;
+    // How much lower the second start is, where the first touches.
+    let lower = h.fit.low_start.map(|l| h.fit.start_clearance - l);
     let mut out = Vec::new();
     let mut any_free = false;
     for &yaw in yaws {
@@ -164,7 +166,6 @@ fn fit_headings(
             agent.cylinders_into(f, |j| !unchecked.contains(&j), parts);
             !parts.iter().any(|c| scene.touches(c))
         };
-        let lower = h.fit.low_start.map(|l| h.fit.start_clearance - l);
         let (start_z, drop) = if free_at(start_z, &mut parts, &mut f) {
             (start_z, drop)
         } else if let Some(lower) = lower.filter(|&l| free_at(start_z - l, &mut parts, &mut f)) {

@@ -267,7 +267,7 @@ impl NodeContext<'_> {
     }
 
     /// `support`: whether the branch's support parts (if the node has any that the branch
-    /// moves) rest on the scene at sweep parameter `t`: some part has the scene within
+    /// moves) rest on the scene at sweep parameter `t`: each has the scene within
     /// `support_gap` below it, or (with `unseen_reach`) space the scan never saw.
     pub fn support(&self, posture: &Posture, branch: &[usize], t: f64) -> bool {
         let mut p = posture.clone();
@@ -277,11 +277,11 @@ impl NodeContext<'_> {
 
     /// How the branch's support parts rest in `posture` as posed. Each support entry
     /// (a link and a span of it) the branch moves is judged alone: on a seen surface when
-    /// some sample of its span has the scene within `support_gap` below it, else over a
-    /// column where the scan saw nothing within `unseen_reach`, else free. The branch
-    /// rests as its worst entry: [`Rest::Seen`] when every entry is seen, [`Rest::Free`]
-    /// when any is free, else [`Rest::Unseen`]. So two spans of one link (a forearm at
-    /// the elbow and further along) ask that the link rest along its length.
+    /// some sample of its span (with `support_share`, that share of them) has the scene
+    /// within `support_gap` below it, else over a column where the scan saw nothing
+    /// within `unseen_reach`, else free. The branch rests as its worst entry:
+    /// [`Rest::Seen`] when every entry is seen, [`Rest::Free`] when any is free, else
+    /// [`Rest::Unseen`].
     fn resting(&self, p: &Posture, branch: &[usize]) -> Rest {
         let (agent, node, scene) = (self.agent, self.node, self.scene);
         let mine: Vec<(usize, [f64; 2])> = node
@@ -318,18 +318,16 @@ impl NodeContext<'_> {
                     samples.clone().filter(|q| on(q)).count() as f64 >= share * (n + 1) as f64
                 }
             };
-            let rest = if seen {
-                Rest::Seen
-            } else if node
+            if seen {
+                continue;
+            }
+            if node
                 .unseen_reach
                 .is_some_and(|reach| samples.clone().any(|q| !scene.sees_below(&q, reach)))
             {
-                Rest::Unseen
+                worst = Rest::Unseen;
             } else {
                 return Rest::Free;
-            };
-            if rest == Rest::Unseen {
-                worst = Rest::Unseen;
             }
         }
         worst

@@ -208,8 +208,9 @@ pub struct Node {
     pub contact: ContactRule,
     /// Parts that must rest on the scene at a contact (an extension of the paper: lying
     /// needs the back of the head and the heels supported, not only the trunk): at the
-    /// contact, some part of each branch's support links (joint index, span) must have the
-    /// scene within `support_gap` straight below it. Empty: any contact counts.
+    /// contact, every support link (joint index, span) the branch moves must have the
+    /// scene within `support_gap` straight below some sample of its span (with
+    /// `support_share`, below that share of them). Empty: any contact counts.
     pub support: Vec<(usize, [f64; 2])>,
     /// See `support`, metres.
     pub support_gap: f64,
