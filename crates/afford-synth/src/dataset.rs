@@ -39,8 +39,9 @@
 //! Scene kinds: `full` (whole model sampled over its surface with light noise, with a
 //! floor patch), `view` (one depth view including the floor), `wall` (object with its back
 //! against a wall 0–0.15 m behind it, one view), `room` (2–4 non-overlapping objects in a
-//! 4 × 4 m room with walls, one view; labels are the OR over the objects whose seat or
-//! lying surface is visible; a fine-grained column is 1 if it is 1 for a counted object,
+//! 4 × 4 m room with walls, one view; labels are the OR over the objects in view, seat
+//! seen or not (per object: a chair seen from behind is a seat; see
+//! [`render_with_visibility`]); a fine-grained column is 1 if it is 1 for a counted object,
 //! else empty if it is undecided for one, else 0). World frame: metres, z up, floor at z = 0.
 
 use std::path::{Path, PathBuf};
@@ -1223,14 +1224,15 @@ pub const LYING_MIN_RECLINER_LENGTH: f64 = 1.5;
 /// the sitting hierarchy's backrest sweep ends there ("beyond 35 deg it is lying").
 pub const BACKREST_MAX_RECLINE_DEG: f64 = 35.0;
 
-/// Least visible area of a seat or lying surface (m^2) for its labels to count in a view:
-/// about a 0.22 m square, under which the torso template (0.30 m across at 1.75 m)
-/// cannot rest on it, and neither could a person judging the picture.
-const MIN_VISIBLE_SEAT_M2: f64 = 0.05;
+/// Least number of an object's points seen in a view for its labels to count: the object
+/// is in the picture (a person judging it would name it), not a few stray pixels of a leg
+/// at the image edge. Whether its seat is seen does not matter: labels are per object, as
+/// in the real furniture models' labels, so a chair seen from behind, its seat hidden by
+/// its back, is still a seat (docs/conventions.md, "Hidden seats").
+const MIN_IN_VIEW_POINTS: usize = 100;
 
-/// Renders `scene` with `objects` given by triangle ranges; an object's labels count when
-/// at least [`MIN_VISIBLE_SEAT_M2`] of its (horizontal) seat or lying surface is seen, each
-/// point standing for the patch its pixel covers.
+/// Renders `scene` with `objects` given by triangle ranges; an object's labels (and its
+/// `doubtful` note) count when at least [`MIN_IN_VIEW_POINTS`] of its points are seen.
 pub(super) fn render_with_visibility(
     scene: &Mesh,
     ranges: &[(usize, usize, Labels, Option<String>)],
@@ -1241,27 +1243,13 @@ pub(super) fn render_with_visibility(
     let parts: Vec<Part> = tris.iter().map(|&t| scene.parts[t]).collect();
     let mut labels = Labels::default();
     let mut doubtful = None;
-    let pixel = (cam.hfov_deg / cam.width as f64 * cam.stride.max(1) as f64).to_radians();
     for (s, e, l, d) in ranges {
-        let seen: f64 = tris
-            .iter()
-            .zip(&cloud.points)
-            .filter(|(&t, _)| {
-                t >= *s && t < *e && matches!(scene.parts[t], Part::Seat | Part::LyingSurface)
-            })
-            .map(|(_, p)| {
-                let ray = p - cam.position;
-                let r = ray.norm();
-                // A horizontal surface seen at a slant covers more per pixel.
-                (r * pixel).powi(2) / (ray.z.abs() / r).max(0.2)
-            })
-            .sum();
-        // Doubtful objects have no seat part: count any visible point.
-        let any = tris.iter().filter(|&&t| t >= *s && t < *e).count();
-        if seen >= MIN_VISIBLE_SEAT_M2 {
-            labels = labels.or(*l);
+        let seen = tris.iter().filter(|&&t| t >= *s && t < *e).count();
+        if seen < MIN_IN_VIEW_POINTS {
+            continue;
         }
-        if d.is_some() && any >= 100 && doubtful.is_none() {
+        labels = labels.or(*l);
+        if d.is_some() && doubtful.is_none() {
             doubtful.clone_from(d);
         }
     }
@@ -2112,6 +2100,30 @@ mod tests {
         assert!(back[0].labels.lying && back[0].labels.sitting);
         assert_eq!(back[1].labels.posture_cells(), ["0"; 4]);
         assert_eq!(back[1].points, 6);
+    }
+
+    #[test]
+    fn a_chair_seen_from_behind_is_a_seat_though_its_seat_is_hidden() {
+        use crate::furniture::{chair, ChairParams};
+        let mut scene = chair(&ChairParams::default());
+        let n = scene.triangles.len();
+        scene.append(&big_floor());
+        let labels = Labels {
+            sitting: true,
+            backrest: true,
+            ..Labels::default()
+        };
+        let ranges = [(0, n, labels, None)];
+        // The chair faces +x; a camera 2.5 m behind it at 1.2 m looks over its back.
+        let behind = Camera::looking_at(p3(-2.5, 0.0, 1.2), p3(0.0, 0.0, 0.45));
+        let (_, parts, seen, _) = render_with_visibility(&scene, &ranges, &behind, 1);
+        assert!(!parts.contains(&Part::Seat), "the back hides the seat");
+        assert!(parts.contains(&Part::Backrest));
+        assert_eq!(seen, labels);
+        // Looking away from the chair, nothing of it is in view: no labels.
+        let away = Camera::looking_at(p3(-2.5, 0.0, 1.2), p3(-5.0, 0.0, 0.45));
+        let (_, _, none, _) = render_with_visibility(&scene, &ranges, &away, 1);
+        assert_eq!(none, Labels::default());
     }
 
     #[test]
