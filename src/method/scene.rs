@@ -58,8 +58,9 @@ pub struct Scene {
 
 /// Bytes the distance field of a scene spanning `extent` (metres along x, y, z, the
 /// occupied voxels' span) takes at most while a body moves within a cube of edge `reach`
-/// metres: a box of at most [`DENSE_CELLS`] has its first two passes computed at once and
-/// its last pass in tiles of columns where asked (at most two f32 grids); a larger one takes one
+/// metres: a box of at most [`DENSE_CELLS`] has its first two passes computed in strips of
+/// columns and its last pass in tiles of columns where asked (at most two f32 grids); a
+/// larger one takes one
 /// chunk slot per chunk of its box and the chunks covering that cube (an upper bound, in
 /// f64 so any extent gives a number). Chunks beyond the cube are
 /// computed only where bodies elsewhere ask for them (at most [`KEPT_CHUNKS`] kept).
@@ -69,7 +70,7 @@ pub fn field_bytes(extent: [f64; 3], cfg: &SceneConfig, reach: f64) -> f64 {
     let dims = extent.map(|e| (e / v).floor() + 2.0 + margin);
     let cells: f64 = dims.iter().product();
     if cells <= DENSE_CELLS as f64 {
-        // The first two passes' grid, and the last pass's tiles: at most a second grid.
+        // The first two passes' strips, and the last pass's tiles: at most a grid each.
         return cells * 2.0 * std::mem::size_of::<f32>() as f64;
     }
     let chunks: f64 = dims.iter().map(|d| (d / CHUNK as f64).ceil()).product();
@@ -884,10 +885,12 @@ const FIRST_PAD: usize = CHUNK / 4;
 const PAD_GROWTH: usize = 4;
 /// Squared distance (cells) standing for "no occupied cell in reach" in the passes.
 const FAR: f32 = 1e20;
-/// Largest field box (cells) whose first two passes are computed at once, densely (4 bytes
-/// a cell, and up to 4 more for the last pass's tiles where bodies ask): 2^25 cells, 256 MiB, a 1M-point room scan at 2 cm; there one
-/// pass over the box costs about a third of the instructions of computing its chunks with
-/// their borders. Larger boxes are computed in chunks where they are used.
+/// Largest field box (cells) whose passes are computed densely, in strips and tiles of
+/// whole columns where bodies ask (up to 4 bytes a cell for the first two passes' strips,
+/// and up to 4 more for the last pass's tiles): 2^25 cells, 256 MiB, a 1M-point room scan
+/// at 2 cm; there one pass over the box costs about a third of the instructions of
+/// computing its chunks with their borders. Larger boxes are computed in chunks where
+/// they are used.
 const DENSE_CELLS: usize = 1 << 25;
 /// Most chunks kept at once: 512 MiB of distances. A 1M-point room scan at 2 cm touches
 /// about a fifth of that; past it, distances are computed cell by cell and not kept, so
@@ -950,7 +953,8 @@ struct DistanceField {
     /// Chunks computed and kept so far.
     kept: AtomicUsize,
     /// The distances of a box of at most [`DENSE_CELLS`]: its first two passes computed
-    /// at once, the last one in tiles of columns where asked; `None` for a larger box (then
+    /// in strips of columns, the last one in tiles of columns, where asked; `None` for a
+    /// larger box (then
     /// `chunks` holds them).
     dense: Option<dense::Columns>,
 }
@@ -1048,7 +1052,7 @@ impl DistanceField {
     fn get(&self, k: [i64; 3]) -> Option<f32> {
         let o = self.offsets(k)?;
         if let Some(d) = &self.dense {
-            return Some(d.get(o));
+            return Some(d.get(self, o));
         }
         let c = o.map(|i| i / CHUNK);
         let [cnx, cny, _] = self.chunk_dims;
@@ -1353,78 +1357,128 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
 
 mod dense {
     //! The dense exact transform, for boxes small enough to hold at once
-    //! ([`DENSE_CELLS`]): the passes along x and y over the whole box, the pass along z
-    //! per tile of columns where asked; faster than chunks there; the chunked field equals
-    //! it bit for bit.
+    //! ([`DENSE_CELLS`]): the passes along x and y per strip of columns, the pass along z
+    //! per tile of columns, each where first asked; faster than chunks there; the chunked
+    //! field equals it bit for bit.
     use super::*;
 
     /// Edge of a tile of columns, cells: the unit in which the last pass (along z) is
-    /// computed and kept. 8 x 8 columns (0.16 m square at 2 cm) is finer than a limb, so
+    /// computed and kept, and the width (along x) of the strips the first two passes are
+    /// computed in. 8 x 8 columns (0.16 m square at 2 cm) is finer than a limb, so
     /// little is computed that no body asks for, and coarse enough that the tiles' slots
     /// (one `OnceLock` each) cost nothing beside the grid.
     const TILE: usize = 8;
 
     /// The exact distance field of a box of at most [`DENSE_CELLS`]: the first two passes
-    /// of the transform (along x, then y) over the whole box, and the last one (along z,
-    /// which reads only its own column) per tile of [`TILE`] x [`TILE`] columns, on first
-    /// use. Every value equals [`dense_distances`] of the box, bit for bit.
+    /// of the transform (along x, then y) per strip of [`TILE`] columns along x (every y
+    /// and z), and the last one (along z, which reads only its own column) per tile of
+    /// [`TILE`] x [`TILE`] columns, each on first use. A line along y reads only its own
+    /// (x, z) and the rows along x it crosses, so a strip's values are those of the passes
+    /// over the whole box. Every value equals [`dense_distances`] of the box, bit for bit.
     #[derive(Debug)]
     pub(super) struct Columns {
         /// Cells along x, y, z.
         dims: [usize; 3],
         /// Voxel edge, metres, in the precision of the stored distances.
         voxel: f32,
-        /// Squared distances (cells) after the passes along x and y, z-major
-        /// (`(z * ny + y) * nx + x`).
-        planes: Vec<f32>,
-        /// Tiles along x.
+        /// Per z slab, whether it holds an occupied cell: a slab without one is [`FAR`]
+        /// after the passes along x and y (the transform of a constant FAR line is FAR).
+        slab_used: Vec<bool>,
+        /// Tiles along x (and strips).
         tiles_x: usize,
+        /// Squared distances (cells) after the passes along x and y per strip (`tx`),
+        /// laid out `(z * ny + y) * TILE + x % TILE`; computed on first use.
+        strips: Vec<OnceLock<Box<[f32]>>>,
         /// Distances (metres) per tile (`ty * tiles_x + tx`), laid out
         /// `(z * TILE + y) * TILE + x` within it; computed on first use.
         tiles: Vec<OnceLock<Box<[f32]>>>,
     }
 
     impl Columns {
-        /// The first two passes over the box `min .. min + dims` of the occupied voxel
-        /// `keys`, voxel edge `v` metres.
+        /// The slots of the box `min .. min + dims` of the occupied voxel `keys`, voxel
+        /// edge `v` metres; nothing is computed yet.
         pub(super) fn new(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]], v: f64) -> Columns {
             let tiles_x = dims[0].div_ceil(TILE);
             let tiles = (0..tiles_x * dims[1].div_ceil(TILE))
                 .map(|_| OnceLock::new())
                 .collect();
+            let mut slab_used = vec![false; dims[2]];
+            for k in keys {
+                if let Some(u) = slab_used.get_mut(offset(k[2] - min[2])) {
+                    *u = true;
+                }
+            }
             Columns {
                 dims,
                 voxel: to_f32(v),
-                planes: planes(min, dims, keys),
+                slab_used,
                 tiles_x,
+                strips: (0..tiles_x).map(|_| OnceLock::new()).collect(),
                 tiles,
             }
         }
 
-        /// The distance (metres) at offsets `o` (inside the box). Inlined into the
-        /// field's reads, the hot path of the contact search (left to itself, the
-        /// compiler's choice follows how the crate is split into codegen units).
+        /// The distance (metres) at offsets `o` (inside the box), the occupied rows read
+        /// from `field` (the field this is part of). Inlined into the field's reads, the
+        /// hot path of the contact search (left to itself, the compiler's choice follows
+        /// how the crate is split into codegen units).
         #[inline]
-        pub(super) fn get(&self, o: [usize; 3]) -> f32 {
+        pub(super) fn get(&self, field: &DistanceField, o: [usize; 3]) -> f32 {
             let (tx, ty) = (o[0] / TILE, o[1] / TILE);
-            let tile = self.tiles[ty * self.tiles_x + tx].get_or_init(|| self.tile(tx, ty));
+            let tile = self.tiles[ty * self.tiles_x + tx].get_or_init(|| self.tile(field, tx, ty));
             tile[(o[2] * TILE + o[1] % TILE) * TILE + o[0] % TILE]
         }
 
-        /// The last pass over the columns of tile `(tx, ty)`.
-        fn tile(&self, tx: usize, ty: usize) -> Box<[f32]> {
+        /// The passes along x and y over the columns of strip `tx` (x from `tx * TILE`,
+        /// every y and z): per used slab, each occupied row's nearest occupied cell for the
+        /// strip's x ([`nearest_in_list`], the exact squared distances of the pass along
+        /// x; rows without one stay [`FAR`]), then the transform of each line along y.
+        fn strip(&self, field: &DistanceField, tx: usize) -> Box<[f32]> {
             let [nx, ny, nz] = self.dims;
+            let x0 = tx * TILE;
+            let w = TILE.min(nx - x0);
+            let mut out = vec![FAR; nz * ny * TILE].into_boxed_slice();
+            // The strip's lines along y of one slab, `xi * ny + y`.
+            let mut lines = vec![FAR; TILE * ny];
+            let mut near = [FAR; TILE];
+            let (mut d, mut vs, mut zs) = (vec![0f32; ny], vec![0usize; ny], vec![0f32; ny + 1]);
+            for z in 0..nz {
+                if !self.slab_used[z] {
+                    continue;
+                }
+                lines.fill(FAR);
+                for (y, xs) in field.rows_at(z, 0, ny) {
+                    near.fill(FAR);
+                    nearest_in_list(xs, x0, &mut near[..w]);
+                    for (xi, &q) in near[..w].iter().enumerate() {
+                        lines[xi * ny + y] = q;
+                    }
+                }
+                for xi in 0..w {
+                    edt_1d(&lines[xi * ny..(xi + 1) * ny], &mut d, &mut vs, &mut zs);
+                    for (y, &q) in d.iter().enumerate() {
+                        out[(z * ny + y) * TILE + xi] = q;
+                    }
+                }
+            }
+            out
+        }
+
+        /// The last pass over the columns of tile `(tx, ty)`, from its strip.
+        fn tile(&self, field: &DistanceField, tx: usize, ty: usize) -> Box<[f32]> {
+            let [nx, ny, nz] = self.dims;
+            let strip = self.strips[tx].get_or_init(|| self.strip(field, tx));
             let mut out = vec![f32::INFINITY; nz * TILE * TILE].into_boxed_slice();
             let (mut f, mut d) = (vec![0f32; nz], vec![0f32; nz]);
             let (mut vs, mut zs) = (vec![0usize; nz], vec![0f32; nz + 1]);
             for y in ty * TILE..((ty + 1) * TILE).min(ny) {
-                for x in tx * TILE..((tx + 1) * TILE).min(nx) {
+                for xi in 0..TILE.min(nx - tx * TILE) {
                     for (z, fz) in f.iter_mut().enumerate() {
-                        *fz = self.planes[(z * ny + y) * nx + x];
+                        *fz = strip[(z * ny + y) * TILE + xi];
                     }
                     edt_1d(&f, &mut d, &mut vs, &mut zs);
                     for (z, &q) in d.iter().enumerate() {
-                        out[(z * TILE + y % TILE) * TILE + x % TILE] = distance(q, self.voxel);
+                        out[(z * TILE + y % TILE) * TILE + xi] = distance(q, self.voxel);
                     }
                 }
             }
@@ -1473,7 +1527,9 @@ mod dense {
 
     /// The first two passes of the transform (along x, then y) of the occupied voxel
     /// `keys` over the box `min .. min + dims`: squared distances in cells, z-major
-    /// (`(z * ny + y) * nx + x`), [`FAR`] where a slab has no occupied cell.
+    /// (`(z * ny + y) * nx + x`), [`FAR`] where a slab has no occupied cell. The
+    /// reference [`Columns`]' strips equal.
+    #[cfg(test)]
     fn planes(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]]) -> Vec<f32> {
         use rayon::prelude::*;
         let [nx, ny, nz] = dims;
@@ -1526,6 +1582,7 @@ mod dense {
     /// Squared distances (in cells) along a row of 0 (occupied) and FAR cells to its nearest
     /// occupied cell, in place; a row without one stays FAR. Equal, bit for bit, to
     /// [`edt_1d`] of the row (both are exact: squared distances are small integers in f32).
+    #[cfg(test)]
     pub(super) fn nearest_in_row(row: &mut [f32]) {
         let mut last = None;
         for (x, d) in row.iter_mut().enumerate() {
@@ -1773,11 +1830,12 @@ mod tests {
             let whole = DistanceField::new(min, dims, &keys, 0.02);
             let [nx, ny, nz] = dims;
             let columns = whole.dense.as_ref().unwrap();
+            let columns = |o: [usize; 3]| columns.get(&whole, o);
             for y in 0..ny {
                 for z in 0..nz {
                     for x in 0..nx {
                         let w = want[(y * nz + z) * nx + x];
-                        assert_eq!(columns.get([x, y, z]).to_bits(), w.to_bits(), "seed {seed}");
+                        assert_eq!(columns([x, y, z]).to_bits(), w.to_bits(), "seed {seed}");
                     }
                 }
             }
