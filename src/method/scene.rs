@@ -309,7 +309,7 @@ impl Scene {
     /// geometry with a margin of [`DECIDE_MARGIN`]; only the voxels between are handed
     /// to parry's GJK, with the poses parry itself would use.
     pub fn intersects(&self, c: &Cylinder) -> bool {
-        self.intersects_near(c, f64::NEG_INFINITY)
+        self.intersects_near(c, f64::NEG_INFINITY, None)
     }
 
     /// [`Self::intersects`] given `centres`, a lower bound on the distance (metres) from
@@ -317,8 +317,10 @@ impl Scene {
     /// when it exceeds the radius, half a voxel diagonal and [`DECIDE_MARGIN`], every
     /// voxel is one the walk would find clear (false at once); when it exceeds half a
     /// diagonal, no axis point lies in an occupied voxel (the look for one is skipped).
-    /// Both with [`F32_SLACK`] for the `f32` geometry the walk classifies with.
-    fn intersects_near(&self, c: &Cylinder, centres: f64) -> bool {
+    /// Both with [`F32_SLACK`] for the `f32` geometry the walk classifies with. With
+    /// `near`, the voxels are taken from it (filled anew when it does not cover the
+    /// cylinder's voxel range): the same voxels, so the same answer.
+    fn intersects_near(&self, c: &Cylinder, centres: f64, near: Option<&mut NearVoxels>) -> bool {
         if self.floor && floor_gap(c) < 0.0 {
             return true;
         }
@@ -370,13 +372,11 @@ impl Scene {
         let (hh, r) = (shape.half_height as f64, shape.radius as f64);
         let size = self.size;
         let half_diag = (size.x as f64).hypot(size.y as f64).hypot(size.z as f64) / 2.0;
-        // `Voxels::voxel_center`.
-        let centre = |k: [i64; 3]| (ivect_to_vect(ivector(k)) + Vector::splat(0.5)) * size;
+        let centre = |k: [i64; 3]| voxel_centre(k, size);
         // Where the voxel centred at `p` stands against the cylinder.
         let clear2 = (r + half_diag + DECIDE_MARGIN).powi(2);
         let inside2 = (r - DECIDE_MARGIN).max(0.0).powi(2);
-        let classify = |k: [i64; 3]| {
-            let p = centre(k);
+        let classify = |p: Vector| {
             let w = Vector3::new(p.x as f64, p.y as f64, p.z as f64) - t;
             let along = w.dot(&u);
             let perp2 = w.norm_squared() - along * along;
@@ -390,16 +390,20 @@ impl Scene {
             }
         };
         let cuboid = parry3d::shape::Cuboid::new(size / 2.0);
-        field.any_occupied(lo, hi, |k| match classify(k) {
+        let touches = |p: Vector| match classify(p) {
             Side::Inside => true,
             Side::Clear => false,
             Side::Boundary => {
-                let pose12 = Pose::from_translation(-centre(k)) * pos12;
+                let pose12 = Pose::from_translation(-p) * pos12;
                 parry3d::query::DefaultQueryDispatcher
                     .intersection_test(&pose12, &cuboid, &shape)
                     .is_ok_and(|r| r.intersecting)
             }
-        })
+        };
+        match near {
+            Some(near) => near.any(field, lo, hi, size, touches),
+            None => field.any_occupied(lo, hi, |k| touches(centre(k))),
+        }
     }
 
     /// Whether the body part `c` touches the scene: [`Self::clearance`] first (cheap, and
@@ -593,8 +597,11 @@ impl Scene {
         let mut parts = Vec::new();
         // Each part's bound on its clearance, ascending, with its index.
         let mut order: Vec<(f64, usize)> = Vec::new();
+        // Each part's voxels near it, kept from step to step.
+        let mut near: Vec<NearVoxels> = Vec::new();
         let mut touching = |t: f64, parts: &mut Vec<Cylinder>| -> (bool, f64) {
             motion(t, parts);
+            near.resize_with(parts.len(), NearVoxels::default);
             order.clear();
             // A lone part is visited whatever its bound: no read for it.
             let lone = parts.len() == 1;
@@ -618,7 +625,7 @@ impl Scene {
                 let c = &parts[i];
                 let (g, centres) = self.clearance_and_centres(c);
                 gap = gap.min(g);
-                if g <= 0.0 && self.intersects_near(c, centres) {
+                if g <= 0.0 && self.intersects_near(c, centres, Some(&mut near[i])) {
                     // The gap is not used once a part touches: the rest need no test.
                     hit = true;
                     break;
@@ -712,6 +719,60 @@ enum Side {
     Inside,
     /// Neither: GJK decides.
     Boundary,
+}
+
+/// The occupied voxels of a range of grid keys, with their centres, kept for one body
+/// part between the steps of a contact search ([`Scene::first_contact`]): a part crossing
+/// free space near a surface moves a quarter voxel per step, so its exact tests often ask
+/// for the same range, or one inside it, again; they filter these instead of walking the
+/// rows of the field. Filled anew from the field's rows when the range leaves it. (Ranges
+/// grown by one to three voxels, or grown the way the part moves, cost more to filter than
+/// the walks they save.)
+#[derive(Debug, Default)]
+struct NearVoxels {
+    /// The range, half-open `lo..hi` (grid keys); empty until filled.
+    lo: [i64; 3],
+    hi: [i64; 3],
+    /// Its occupied voxels' keys and centres (parry's `Voxels::voxel_center`, local frame).
+    voxels: Vec<([i64; 3], Vector)>,
+}
+
+impl NearVoxels {
+    /// Whether any occupied voxel of `field` (voxel edge `size`) in the range `lo..hi`
+    /// passes `test`, from the voxels kept (gathered anew unless the range lies in the
+    /// one kept). The voxels passed are the same as [`DistanceField::any_occupied`]'s,
+    /// in another order, so the answer is the same.
+    fn any(
+        &mut self,
+        field: &DistanceField,
+        lo: [i64; 3],
+        hi: [i64; 3],
+        size: Vector,
+        mut test: impl FnMut(Vector) -> bool,
+    ) -> bool {
+        let inside = (0..3).all(|a| self.lo[a] <= lo[a] && hi[a] <= self.hi[a]);
+        if !inside {
+            (self.lo, self.hi) = (lo, hi);
+            self.voxels.clear();
+            field.any_occupied(lo, hi, |k| {
+                self.voxels.push((k, voxel_centre(k, size)));
+                false
+            });
+        }
+        if (self.lo, self.hi) == (lo, hi) {
+            self.voxels.iter().any(|&(_, p)| test(p))
+        } else {
+            self.voxels
+                .iter()
+                .filter(|(k, _)| (0..3).all(|a| lo[a] <= k[a] && k[a] < hi[a]))
+                .any(|&(_, p)| test(p))
+        }
+    }
+}
+
+/// Parry's `Voxels::voxel_center` of the voxel with grid key `k` (edge `size`, local frame).
+fn voxel_centre(k: [i64; 3], size: Vector) -> Vector {
+    (ivect_to_vect(ivector(k)) + Vector::splat(0.5)) * size
 }
 
 /// A grid key as parry3d's voxel index (`i32` per axis), saturating. Keys count voxels
@@ -2078,6 +2139,7 @@ mod tests {
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         let (mut hits, mut misses) = (0, 0);
+        let mut near = NearVoxels::default();
         for i in 0..4000 {
             let a = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, next() * 0.9);
             let mut d = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * next();
@@ -2095,7 +2157,27 @@ mod tests {
             let want = s.intersects_parry(&c);
             assert_eq!(s.intersects(&c), want, "{c:?}");
             let centres = s.clearance_and_centres(&c).1;
-            assert_eq!(s.intersects_near(&c, centres), want, "{c:?}");
+            assert_eq!(s.intersects_near(&c, centres, None), want, "{c:?}");
+            // From the voxels kept near the cylinder before, and near one nudged a few
+            // millimetres (within the kept box, or filling it anew).
+            assert_eq!(
+                s.intersects_near(&c, centres, Some(&mut near)),
+                want,
+                "{c:?}"
+            );
+            let shift = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.01;
+            let moved = Cylinder {
+                a: c.a + shift,
+                b: c.b + shift,
+                ..c
+            };
+            let moved_want = s.intersects_parry(&moved);
+            let centres = s.clearance_and_centres(&moved).1;
+            assert_eq!(
+                s.intersects_near(&moved, centres, Some(&mut near)),
+                moved_want,
+                "{moved:?}"
+            );
             if want {
                 hits += 1;
             } else {
