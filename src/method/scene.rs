@@ -264,7 +264,12 @@ impl Scene {
     /// the midpoint's less `R + h`; the sample spacing is at most one voxel. `None` when
     /// some sampled cell may lie outside the field's box (there the clearance is the
     /// distance to the occupied box, which the field does not bound) or without a field.
-    fn clearance_bound(&self, c: &Cylinder) -> Option<f64> {
+    ///
+    /// With `last`, the clearance `g` computed for the same part at another pose with
+    /// every sampled cell in the box, and how far (metres) no point of it has moved since,
+    /// the bound [`carried_bound`] gives is taken as well (the larger of the two), and
+    /// alone, with no read, when it is positive.
+    fn clearance_bound(&self, c: &Cylinder, last: Option<(f64, f64)>) -> Option<f64> {
         let field = self.field.as_ref()?;
         let v = self.voxel;
         let (la, lb) = (
@@ -273,6 +278,10 @@ impl Scene {
         );
         if !field.holds_segment(cell_of(&la), cell_of(&lb)) {
             return None;
+        }
+        let carried = last.map(|(g, moved)| carried_bound(c, g, moved, v));
+        if let Some(b) = carried.filter(|&b| b > 0.0) {
+            return Some(b);
         }
         let km = cell_of(&((la + lb) / 2.0));
         let d = f64::from(field.get(km)?);
@@ -296,7 +305,9 @@ impl Scene {
         } else {
             f64::INFINITY
         };
-        Some(bound.min(floor))
+        let read = bound.min(floor);
+        // `max` takes the other when one is NaN.
+        Some(carried.map_or(read, |b| read.max(b)))
     }
 
     /// Exact test: does the body part `c` intersect an occupied voxel or the floor?
@@ -581,9 +592,10 @@ impl Scene {
 
 impl Scene {
     /// The first parameter `t` in [0, 1] at which a moving set of body parts touches the
-    /// scene, or `None` if it stays free. `motion(t, out)` writes the posed parts at `t`;
-    /// `speed` bounds how far (metres) any point of them moves per unit of `t`; contact is
-    /// located to within `resolution` metres of motion.
+    /// scene, or `None` if it stays free. `motion(t, out)` writes the posed parts at `t`,
+    /// the same parts in the same order at every `t`; `speed` bounds how far (metres) any
+    /// point of them moves per unit of `t`; contact is located to within `resolution`
+    /// metres of motion.
     ///
     /// Free space is crossed in steps as long as the distance field's clearance allows
     /// (conservative advancement); exact parry3d tests are made only for parts whose
@@ -599,31 +611,50 @@ impl Scene {
         let mut order: Vec<(f64, usize)> = Vec::new();
         // Each part's voxels near it, kept from step to step.
         let mut near: Vec<NearVoxels> = Vec::new();
+        // Per part, whether every cell its clearance samples is in the field's box at
+        // this `t` (known when its bound was read), and the clearance last computed for
+        // it while they were, with that `t`.
+        let mut in_field: Vec<bool> = Vec::new();
+        let mut last: Vec<Option<(f64, f64)>> = Vec::new();
         let mut touching = |t: f64, parts: &mut Vec<Cylinder>| -> (bool, f64) {
             motion(t, parts);
             near.resize_with(parts.len(), NearVoxels::default);
+            if last.len() != parts.len() {
+                last.clear();
+                last.resize(parts.len(), None);
+            }
+            in_field.clear();
             order.clear();
             // A lone part is visited whatever its bound: no read for it.
             let lone = parts.len() == 1;
-            order.extend(parts.iter().enumerate().map(|(i, c)| {
+            for (i, c) in parts.iter().enumerate() {
+                // `speed` bounds the motion; its size, should a caller pass it negative.
+                let moved = |(g, at): (f64, f64)| (g, (speed * (t - at)).abs());
                 let b = (!lone)
-                    .then(|| self.clearance_bound(c))
-                    .flatten()
-                    .filter(|b| !b.is_nan());
-                (b.unwrap_or(f64::NEG_INFINITY), i)
-            }));
+                    .then(|| self.clearance_bound(c, last[i].map(moved)))
+                    .flatten();
+                in_field.push(b.is_some());
+                let b = b.filter(|b| !b.is_nan());
+                order.push((b.unwrap_or(f64::NEG_INFINITY), i));
+            }
             order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
             let mut gap = f64::INFINITY;
             let mut hit = false;
             for &(bound, i) in order.iter() {
-                // This part and all after it have a positive clearance no smaller than
-                // the gap found: none touches or lowers the gap (the answer is the same
-                // as testing every part: whether any touches, else the least clearance).
-                if bound > 0.0 && bound >= gap {
+                // This part and all after it have a positive clearance, so none touches;
+                // none lowers the gap if their bounds are no smaller than it, and when
+                // the gap is at most `resolution` its value no longer matters (`advance`
+                // steps by `resolution` for any gap up to it). So the answer is the same
+                // as testing every part: whether any touches, else the least clearance
+                // (or, like it, a gap of at most `resolution`).
+                if bound > 0.0 && (bound >= gap || gap <= resolution) {
                     break;
                 }
                 let c = &parts[i];
                 let (g, centres) = self.clearance_and_centres(c);
+                if in_field[i] {
+                    last[i] = Some((g, t));
+                }
                 gap = gap.min(g);
                 if g <= 0.0 && self.intersects_near(c, centres, Some(&mut near[i])) {
                     // The gap is not used once a part touches: the rest need no test.
@@ -635,6 +666,25 @@ impl Scene {
         };
         advance(|t| touching(t, &mut parts), speed, resolution)
     }
+}
+
+/// A lower bound on the clearance ([`Scene::clearance`]) of the body part `c` (voxel edge
+/// `v` metres), given that the part's clearance was `g` at another pose from which no
+/// point of it has moved more than `moved` metres, and that every sampled cell lies in
+/// the field's box at both poses.
+///
+/// Each sample now lies within `moved` of the point of the axis at the same fraction
+/// then, which lies within half a sample spacing of a sample then; distances to occupied
+/// voxel centres are 1-Lipschitz, and a cell's stored distance is within half a cell
+/// diagonal `h` of the distance at any point of the cell, so the least sampled distance
+/// is at least the least then less `moved`, half the old spacing and `2 h`; the clearance
+/// takes off half the new spacing (at most `v / 2`) where the old clearance took off half
+/// the old one. The floor's gap is 1-Lipschitz in the motion. [`BOUND_SLACK`] covers the
+/// `f32` rounding of the stored distances, as in [`Scene::clearance_bound`].
+fn carried_bound(c: &Cylinder, g: f64, moved: f64, v: f64) -> f64 {
+    let half_diag = v * 3f64.sqrt() / 2.0;
+    let len = (c.b - c.a).norm();
+    g - moved - 2.0 * half_diag - v / 2.0 - BOUND_SLACK * (1.0 + g.abs() + moved + len + c.radius)
 }
 
 /// Conservative advancement and bisection: the first `t` in [0, 1] at which `touching(t)`
@@ -2237,21 +2287,63 @@ mod tests {
             let mut state = 99u64;
             let mut next = || uniform(&mut state);
             let (mut bounded, mut near) = (0, 0);
+            let (mut carried, mut tight) = (0, 0);
             for _ in 0..20000 {
                 // Around and beyond the field's box (0.2 m past the voxels).
                 let a = Point3::new(next() * 2.4 - 0.8, next() * 1.4 - 0.4, next() * 1.4 - 0.2);
                 let c = random_cylinder(&mut next, a);
                 let g = s.clearance(&c);
                 assert_eq!(g.to_bits(), clearance_reference(&s, &c).to_bits(), "{c:?}");
-                if let Some(b) = s.clearance_bound(&c) {
+                if let Some(b) = s.clearance_bound(&c, None) {
                     assert!(b <= g, "bound {b} over clearance {g}: {c:?}");
                     bounded += 1;
                     near += usize::from(g - b < 0.1);
+                } else {
+                    continue;
                 }
+                // The part turned about a point near it and shifted, by up to a few
+                // centimetres: its clearance there against the bound carried from here.
+                let pivot = a + Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.6;
+                let axis = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5);
+                // Half of them by under 2 mm (crossing a cell face moves the sampled
+                // cells' distances most for the least motion).
+                let scale = if next() < 0.5 { 0.05 } else { 1.0 };
+                let angle = next() * next() * 0.1 * scale;
+                let shift =
+                    Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * next() * 0.04 * scale;
+                let turn = nalgebra::Rotation3::from_axis_angle(
+                    &nalgebra::Unit::new_normalize(axis),
+                    angle,
+                );
+                let pose = |p: Point3<f64>| pivot + turn * (p - pivot) + shift;
+                let moved_part = Cylinder {
+                    a: pose(c.a),
+                    b: pose(c.b),
+                    ..c
+                };
+                // Every point of the part moves at most the shift plus the angle times
+                // its distance from the pivot (an arc is longer than its chord).
+                let lever = (c.a - pivot).norm().max((c.b - pivot).norm()) + c.radius;
+                let moved = shift.norm() + angle * lever;
+                let Some(b) = s.clearance_bound(&moved_part, Some((g, moved))) else {
+                    continue;
+                };
+                let g2 = s.clearance(&moved_part);
+                assert!(b <= g2, "carried {b} over clearance {g2}: {moved_part:?}");
+                assert!(
+                    carried_bound(&moved_part, g, moved, s.voxel) <= g2,
+                    "{moved_part:?}"
+                );
+                carried += 1;
+                tight += usize::from(g2 - carried_bound(&moved_part, g, moved, s.voxel) < 0.06);
             }
             assert!(
                 bounded > 5000 && near > 1000,
                 "{bounded} bounded, {near} near"
+            );
+            assert!(
+                carried > 4000 && tight > 100,
+                "{carried} carried, {tight} tight"
             );
         }
     }
@@ -2344,8 +2436,9 @@ mod tests {
             let mut state = 7u64;
             let mut next = || uniform(&mut state);
             let (mut hits, mut misses) = (0, 0);
-            for _ in 0..300 {
-                // A body of 2 to 8 parts moved along a straight line from above the scene.
+            for case in 0..300 {
+                // A body of 2 to 8 parts moved along a straight line from above the scene,
+                // every other one turning about a point near it as well.
                 let n = 2 + to_usize(next() * 7.0);
                 let base = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, 0.5 + next());
                 let parts: Vec<Cylinder> = (0..n)
@@ -2361,15 +2454,33 @@ mod tests {
                     })
                     .collect();
                 let dir = Vector3::new(next() - 0.5, next() - 0.5, -next() * 2.0);
+                let pivot = base + Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.4;
+                let axis = nalgebra::Unit::new_normalize(Vector3::new(
+                    next() - 0.5,
+                    next() - 0.5,
+                    next() - 0.5,
+                ));
+                let angle = if case % 2 == 1 {
+                    (next() - 0.5) * 3.0
+                } else {
+                    0.0
+                };
                 let motion = |t: f64, out: &mut Vec<Cylinder>| {
+                    let turn = nalgebra::Rotation3::from_axis_angle(&axis, angle * t);
+                    let pose = |p: Point3<f64>| pivot + turn * (p - pivot) + dir * t;
                     out.clear();
                     out.extend(parts.iter().map(|c| Cylinder {
-                        a: c.a + dir * t,
-                        b: c.b + dir * t,
+                        a: pose(c.a),
+                        b: pose(c.b),
                         ..*c
                     }));
                 };
-                let speed = dir.norm();
+                // The shift, and the turn times the farthest point from the pivot.
+                let lever = parts
+                    .iter()
+                    .map(|c| (c.a - pivot).norm().max((c.b - pivot).norm()) + c.radius)
+                    .fold(0.0, f64::max);
+                let speed = dir.norm() + angle.abs() * lever;
                 let want = first_contact_reference(&s, motion, speed, 0.005);
                 let got = s.first_contact(motion, speed, 0.005);
                 assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits));
