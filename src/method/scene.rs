@@ -1429,22 +1429,24 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
     v[0] = first;
     z[0] = f32::NEG_INFINITY;
     z[1] = f32::INFINITY;
-    for q in first + 1..n {
-        if f[q] == FAR {
+    for (q, &fq) in f.iter().enumerate().skip(first + 1) {
+        if fq == FAR {
             continue;
         }
+        // The new parabola's terms, as the intersection below computes them.
+        let (hq, q2) = (fq + (q * q) as f32, 2.0 * q as f32);
         loop {
             let p = v[k];
-            let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32))
-                / (2.0 * q as f32 - 2.0 * p as f32);
-            if s <= z[k] && k > 0 {
+            let s = (hq - (f[p] + (p * p) as f32)) / (q2 - 2.0 * p as f32);
+            if s <= z[k] {
+                if k == 0 {
+                    // The new parabola dominates from -inf: replace.
+                    v[0] = q;
+                    z[0] = f32::NEG_INFINITY;
+                    z[1] = f32::INFINITY;
+                    break;
+                }
                 k -= 1;
-            } else if s <= z[k] {
-                // k == 0 and the new parabola dominates from -inf: replace.
-                v[0] = q;
-                z[0] = f32::NEG_INFINITY;
-                z[1] = f32::INFINITY;
-                break;
             } else {
                 k += 1;
                 v[k] = q;
