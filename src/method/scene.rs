@@ -164,14 +164,18 @@ impl Scene {
     /// A lower bound on the gap (metres) between the body part `c` and the scene (voxels and
     /// floor); positive means certainly free, zero or negative means contact is possible.
     pub fn clearance(&self, c: &Cylinder) -> f64 {
-        self.clearance_and_centres(c).0
+        self.clearance_and_centres(c, &mut Vec::new()).0
     }
 
     /// [`Self::clearance`], and a lower bound on the distance (metres) from the axis of
     /// `c` to the centre of any occupied voxel (`f64::NEG_INFINITY` when some sampled cell
     /// is outside the field's box): each read sample's distance less its own offset from
     /// its cell's centre, the samples skipped bounded from the sample that skipped them.
-    fn clearance_and_centres(&self, c: &Cylinder) -> (f64, f64) {
+    ///
+    /// `read` keeps, per sample, the cell last read for it and its distance (a cell's
+    /// distance never changes): a part that moved less than a cell since reads most of its
+    /// cells from there. Reset when the number of samples changes.
+    fn clearance_and_centres(&self, c: &Cylinder, read: &mut ReadCells) -> (f64, f64) {
         let floor = if self.floor {
             floor_gap(c)
         } else {
@@ -190,14 +194,27 @@ impl Scene {
         if self.samples_in_field(c) {
             let v = self.voxel;
             let half_diag = v * 3f64.sqrt() / 2.0;
+            if read.len() != n + 1 {
+                read.clear();
+                read.resize(n + 1, None);
+            }
             // `point_clearance` of sample `i`, and a lower bound on its distance to any
             // occupied voxel centre.
-            let sample = |i: usize| {
+            let mut sample = |i: usize| {
                 let p = point(i);
                 let l = (p.coords - self.origin) / v;
                 let k = cell_of(&l);
-                match field.get(k) {
+                let known = read
+                    .get(i)
+                    .copied()
+                    .flatten()
+                    .filter(|r| r.0 == k)
+                    .map(|r| r.1);
+                match known.or_else(|| field.get(k)) {
                     Some(d) => {
+                        if let Some(r) = read.get_mut(i) {
+                            *r = Some((k, d));
+                        }
                         let centre =
                             Vector3::new(k[0] as f64 + 0.5, k[1] as f64 + 0.5, k[2] as f64 + 0.5);
                         let d = d as f64;
@@ -609,8 +626,10 @@ impl Scene {
         let mut parts = Vec::new();
         // Each part's bound on its clearance, ascending, with its index.
         let mut order: Vec<(f64, usize)> = Vec::new();
-        // Each part's voxels near it, kept from step to step.
+        // Each part's voxels near it and the cells its clearance read, kept from step to
+        // step.
         let mut near: Vec<NearVoxels> = Vec::new();
+        let mut read: Vec<ReadCells> = Vec::new();
         // Per part, whether every cell its clearance samples is in the field's box at
         // this `t` (known when its bound was read), and the clearance last computed for
         // it while they were, with that `t`.
@@ -619,6 +638,7 @@ impl Scene {
         let mut touching = |t: f64, parts: &mut Vec<Cylinder>| -> (bool, f64) {
             motion(t, parts);
             near.resize_with(parts.len(), NearVoxels::default);
+            read.resize_with(parts.len(), Vec::new);
             if last.len() != parts.len() {
                 last.clear();
                 last.resize(parts.len(), None);
@@ -651,7 +671,7 @@ impl Scene {
                     break;
                 }
                 let c = &parts[i];
-                let (g, centres) = self.clearance_and_centres(c);
+                let (g, centres) = self.clearance_and_centres(c, &mut read[i]);
                 if in_field[i] {
                     last[i] = Some((g, t));
                 }
@@ -667,6 +687,10 @@ impl Scene {
         advance(|t| touching(t, &mut parts), speed, resolution)
     }
 }
+
+/// Per sample along a body part's axis, the cell [`Scene::clearance`] last read for it
+/// (grid key) and that cell's distance (metres), if any.
+type ReadCells = Vec<Option<([i64; 3], f32)>>;
 
 /// A lower bound on the clearance ([`Scene::clearance`]) of the body part `c` (voxel edge
 /// `v` metres), given that the part's clearance was `g` at another pose from which no
@@ -2208,7 +2232,7 @@ mod tests {
             };
             let want = s.intersects_parry(&c);
             assert_eq!(s.intersects(&c), want, "{c:?}");
-            let centres = s.clearance_and_centres(&c).1;
+            let centres = s.clearance_and_centres(&c, &mut Vec::new()).1;
             assert_eq!(s.intersects_near(&c, centres, None), want, "{c:?}");
             // From the voxels kept near the cylinder before, and near one nudged a few
             // millimetres (within the kept box, or filling it anew).
@@ -2224,7 +2248,7 @@ mod tests {
                 ..c
             };
             let moved_want = s.intersects_parry(&moved);
-            let centres = s.clearance_and_centres(&moved).1;
+            let centres = s.clearance_and_centres(&moved, &mut Vec::new()).1;
             assert_eq!(
                 s.intersects_near(&moved, centres, Some(&mut near)),
                 moved_want,
@@ -2331,6 +2355,17 @@ mod tests {
                     continue;
                 };
                 let g2 = s.clearance(&moved_part);
+                // The same bits with the cells read for the part before it moved.
+                let mut read = Vec::new();
+                s.clearance_and_centres(&c, &mut read);
+                let (fresh, kept) = (
+                    s.clearance_and_centres(&moved_part, &mut Vec::new()),
+                    s.clearance_and_centres(&moved_part, &mut read),
+                );
+                assert_eq!(
+                    (kept.0.to_bits(), kept.1.to_bits()),
+                    (fresh.0.to_bits(), fresh.1.to_bits())
+                );
                 assert!(b <= g2, "carried {b} over clearance {g2}: {moved_part:?}");
                 assert!(
                     carried_bound(&moved_part, g, moved, s.voxel) <= g2,
@@ -2413,7 +2448,7 @@ mod tests {
         for _ in 0..3000 {
             let a = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, next() * 0.9);
             let c = random_cylinder(&mut next, a);
-            let bound = s.clearance_and_centres(&c).1;
+            let bound = s.clearance_and_centres(&c, &mut Vec::new()).1;
             if bound == f64::NEG_INFINITY {
                 continue;
             }
