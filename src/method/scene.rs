@@ -58,8 +58,9 @@ pub struct Scene {
 
 /// Bytes the distance field of a scene spanning `extent` (metres along x, y, z, the
 /// occupied voxels' span) takes at most while a body moves within a cube of edge `reach`
-/// metres: a box of at most [`DENSE_CELLS`] has its first two passes computed at once and
-/// its last pass in tiles of columns where asked (at most two f32 grids); a larger one takes one
+/// metres: a box of at most [`DENSE_CELLS`] has its first two passes computed in strips of
+/// columns and its last pass in tiles of columns where asked (at most two f32 grids); a
+/// larger one takes one
 /// chunk slot per chunk of its box and the chunks covering that cube (an upper bound, in
 /// f64 so any extent gives a number). Chunks beyond the cube are
 /// computed only where bodies elsewhere ask for them (at most [`KEPT_CHUNKS`] kept).
@@ -69,7 +70,7 @@ pub fn field_bytes(extent: [f64; 3], cfg: &SceneConfig, reach: f64) -> f64 {
     let dims = extent.map(|e| (e / v).floor() + 2.0 + margin);
     let cells: f64 = dims.iter().product();
     if cells <= DENSE_CELLS as f64 {
-        // The first two passes' grid, and the last pass's tiles: at most a second grid.
+        // The first two passes' strips, and the last pass's tiles: at most a grid each.
         return cells * 2.0 * std::mem::size_of::<f32>() as f64;
     }
     let chunks: f64 = dims.iter().map(|d| (d / CHUNK as f64).ceil()).product();
@@ -163,14 +164,18 @@ impl Scene {
     /// A lower bound on the gap (metres) between the body part `c` and the scene (voxels and
     /// floor); positive means certainly free, zero or negative means contact is possible.
     pub fn clearance(&self, c: &Cylinder) -> f64 {
-        self.clearance_and_centres(c).0
+        self.clearance_and_centres(c, &mut Vec::new()).0
     }
 
     /// [`Self::clearance`], and a lower bound on the distance (metres) from the axis of
     /// `c` to the centre of any occupied voxel (`f64::NEG_INFINITY` when some sampled cell
     /// is outside the field's box): each read sample's distance less its own offset from
     /// its cell's centre, the samples skipped bounded from the sample that skipped them.
-    fn clearance_and_centres(&self, c: &Cylinder) -> (f64, f64) {
+    ///
+    /// `read` keeps, per sample, the cell last read for it and its distance (a cell's
+    /// distance never changes): a part that moved less than a cell since reads most of its
+    /// cells from there. Reset when the number of samples changes.
+    fn clearance_and_centres(&self, c: &Cylinder, read: &mut ReadCells) -> (f64, f64) {
         let floor = if self.floor {
             floor_gap(c)
         } else {
@@ -189,14 +194,27 @@ impl Scene {
         if self.samples_in_field(c) {
             let v = self.voxel;
             let half_diag = v * 3f64.sqrt() / 2.0;
+            if read.len() != n + 1 {
+                read.clear();
+                read.resize(n + 1, None);
+            }
             // `point_clearance` of sample `i`, and a lower bound on its distance to any
             // occupied voxel centre.
-            let sample = |i: usize| {
+            let mut sample = |i: usize| {
                 let p = point(i);
                 let l = (p.coords - self.origin) / v;
                 let k = cell_of(&l);
-                match field.get(k) {
+                let known = read
+                    .get(i)
+                    .copied()
+                    .flatten()
+                    .filter(|r| r.0 == k)
+                    .map(|r| r.1);
+                match known.or_else(|| field.get(k)) {
                     Some(d) => {
+                        if let Some(r) = read.get_mut(i) {
+                            *r = Some((k, d));
+                        }
                         let centre =
                             Vector3::new(k[0] as f64 + 0.5, k[1] as f64 + 0.5, k[2] as f64 + 0.5);
                         let d = d as f64;
@@ -263,7 +281,12 @@ impl Scene {
     /// the midpoint's less `R + h`; the sample spacing is at most one voxel. `None` when
     /// some sampled cell may lie outside the field's box (there the clearance is the
     /// distance to the occupied box, which the field does not bound) or without a field.
-    fn clearance_bound(&self, c: &Cylinder) -> Option<f64> {
+    ///
+    /// With `last`, the clearance `g` computed for the same part at another pose with
+    /// every sampled cell in the box, and how far (metres) no point of it has moved since,
+    /// the bound [`carried_bound`] gives is taken as well (the larger of the two), and
+    /// alone, with no read, when it is positive.
+    fn clearance_bound(&self, c: &Cylinder, last: Option<(f64, f64)>) -> Option<f64> {
         let field = self.field.as_ref()?;
         let v = self.voxel;
         let (la, lb) = (
@@ -272,6 +295,10 @@ impl Scene {
         );
         if !field.holds_segment(cell_of(&la), cell_of(&lb)) {
             return None;
+        }
+        let carried = last.map(|(g, moved)| carried_bound(c, g, moved, v));
+        if let Some(b) = carried.filter(|&b| b > 0.0) {
+            return Some(b);
         }
         let km = cell_of(&((la + lb) / 2.0));
         let d = f64::from(field.get(km)?);
@@ -295,7 +322,9 @@ impl Scene {
         } else {
             f64::INFINITY
         };
-        Some(bound.min(floor))
+        let read = bound.min(floor);
+        // `max` takes the other when one is NaN.
+        Some(carried.map_or(read, |b| read.max(b)))
     }
 
     /// Exact test: does the body part `c` intersect an occupied voxel or the floor?
@@ -308,7 +337,7 @@ impl Scene {
     /// geometry with a margin of [`DECIDE_MARGIN`]; only the voxels between are handed
     /// to parry's GJK, with the poses parry itself would use.
     pub fn intersects(&self, c: &Cylinder) -> bool {
-        self.intersects_near(c, f64::NEG_INFINITY)
+        self.intersects_near(c, f64::NEG_INFINITY, None)
     }
 
     /// [`Self::intersects`] given `centres`, a lower bound on the distance (metres) from
@@ -316,8 +345,10 @@ impl Scene {
     /// when it exceeds the radius, half a voxel diagonal and [`DECIDE_MARGIN`], every
     /// voxel is one the walk would find clear (false at once); when it exceeds half a
     /// diagonal, no axis point lies in an occupied voxel (the look for one is skipped).
-    /// Both with [`F32_SLACK`] for the `f32` geometry the walk classifies with.
-    fn intersects_near(&self, c: &Cylinder, centres: f64) -> bool {
+    /// Both with [`F32_SLACK`] for the `f32` geometry the walk classifies with. With
+    /// `near`, the voxels are taken from it (filled anew when it does not cover the
+    /// cylinder's voxel range): the same voxels, so the same answer.
+    fn intersects_near(&self, c: &Cylinder, centres: f64, near: Option<&mut NearVoxels>) -> bool {
         if self.floor && floor_gap(c) < 0.0 {
             return true;
         }
@@ -369,13 +400,11 @@ impl Scene {
         let (hh, r) = (shape.half_height as f64, shape.radius as f64);
         let size = self.size;
         let half_diag = (size.x as f64).hypot(size.y as f64).hypot(size.z as f64) / 2.0;
-        // `Voxels::voxel_center`.
-        let centre = |k: [i64; 3]| (ivect_to_vect(ivector(k)) + Vector::splat(0.5)) * size;
+        let centre = |k: [i64; 3]| voxel_centre(k, size);
         // Where the voxel centred at `p` stands against the cylinder.
         let clear2 = (r + half_diag + DECIDE_MARGIN).powi(2);
         let inside2 = (r - DECIDE_MARGIN).max(0.0).powi(2);
-        let classify = |k: [i64; 3]| {
-            let p = centre(k);
+        let classify = |p: Vector| {
             let w = Vector3::new(p.x as f64, p.y as f64, p.z as f64) - t;
             let along = w.dot(&u);
             let perp2 = w.norm_squared() - along * along;
@@ -389,16 +418,20 @@ impl Scene {
             }
         };
         let cuboid = parry3d::shape::Cuboid::new(size / 2.0);
-        field.any_occupied(lo, hi, |k| match classify(k) {
+        let touches = |p: Vector| match classify(p) {
             Side::Inside => true,
             Side::Clear => false,
             Side::Boundary => {
-                let pose12 = Pose::from_translation(-centre(k)) * pos12;
+                let pose12 = Pose::from_translation(-p) * pos12;
                 parry3d::query::DefaultQueryDispatcher
                     .intersection_test(&pose12, &cuboid, &shape)
                     .is_ok_and(|r| r.intersecting)
             }
-        })
+        };
+        match near {
+            Some(near) => near.any(field, lo, hi, size, touches),
+            None => field.any_occupied(lo, hi, |k| touches(centre(k))),
+        }
     }
 
     /// Whether the body part `c` touches the scene: [`Self::clearance`] first (cheap, and
@@ -576,9 +609,10 @@ impl Scene {
 
 impl Scene {
     /// The first parameter `t` in [0, 1] at which a moving set of body parts touches the
-    /// scene, or `None` if it stays free. `motion(t, out)` writes the posed parts at `t`;
-    /// `speed` bounds how far (metres) any point of them moves per unit of `t`; contact is
-    /// located to within `resolution` metres of motion.
+    /// scene, or `None` if it stays free. `motion(t, out)` writes the posed parts at `t`,
+    /// the same parts in the same order at every `t`; `speed` bounds how far (metres) any
+    /// point of them moves per unit of `t`; contact is located to within `resolution`
+    /// metres of motion.
     ///
     /// Free space is crossed in steps as long as the distance field's clearance allows
     /// (conservative advancement); exact parry3d tests are made only for parts whose
@@ -592,32 +626,57 @@ impl Scene {
         let mut parts = Vec::new();
         // Each part's bound on its clearance, ascending, with its index.
         let mut order: Vec<(f64, usize)> = Vec::new();
+        // Each part's voxels near it and the cells its clearance read, kept from step to
+        // step.
+        let mut near: Vec<NearVoxels> = Vec::new();
+        let mut read: Vec<ReadCells> = Vec::new();
+        // Per part, whether every cell its clearance samples is in the field's box at
+        // this `t` (known when its bound was read), and the clearance last computed for
+        // it while they were, with that `t`.
+        let mut in_field: Vec<bool> = Vec::new();
+        let mut last: Vec<Option<(f64, f64)>> = Vec::new();
         let mut touching = |t: f64, parts: &mut Vec<Cylinder>| -> (bool, f64) {
             motion(t, parts);
+            near.resize_with(parts.len(), NearVoxels::default);
+            read.resize_with(parts.len(), Vec::new);
+            if last.len() != parts.len() {
+                last.clear();
+                last.resize(parts.len(), None);
+            }
+            in_field.clear();
             order.clear();
             // A lone part is visited whatever its bound: no read for it.
             let lone = parts.len() == 1;
-            order.extend(parts.iter().enumerate().map(|(i, c)| {
+            for (i, c) in parts.iter().enumerate() {
+                // `speed` bounds the motion; its size, should a caller pass it negative.
+                let moved = |(g, at): (f64, f64)| (g, (speed * (t - at)).abs());
                 let b = (!lone)
-                    .then(|| self.clearance_bound(c))
-                    .flatten()
-                    .filter(|b| !b.is_nan());
-                (b.unwrap_or(f64::NEG_INFINITY), i)
-            }));
+                    .then(|| self.clearance_bound(c, last[i].map(moved)))
+                    .flatten();
+                in_field.push(b.is_some());
+                let b = b.filter(|b| !b.is_nan());
+                order.push((b.unwrap_or(f64::NEG_INFINITY), i));
+            }
             order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
             let mut gap = f64::INFINITY;
             let mut hit = false;
             for &(bound, i) in order.iter() {
-                // This part and all after it have a positive clearance no smaller than
-                // the gap found: none touches or lowers the gap (the answer is the same
-                // as testing every part: whether any touches, else the least clearance).
-                if bound > 0.0 && bound >= gap {
+                // This part and all after it have a positive clearance, so none touches;
+                // none lowers the gap if their bounds are no smaller than it, and when
+                // the gap is at most `resolution` its value no longer matters (`advance`
+                // steps by `resolution` for any gap up to it). So the answer is the same
+                // as testing every part: whether any touches, else the least clearance
+                // (or, like it, a gap of at most `resolution`).
+                if bound > 0.0 && (bound >= gap || gap <= resolution) {
                     break;
                 }
                 let c = &parts[i];
-                let (g, centres) = self.clearance_and_centres(c);
+                let (g, centres) = self.clearance_and_centres(c, &mut read[i]);
+                if in_field[i] {
+                    last[i] = Some((g, t));
+                }
                 gap = gap.min(g);
-                if g <= 0.0 && self.intersects_near(c, centres) {
+                if g <= 0.0 && self.intersects_near(c, centres, Some(&mut near[i])) {
                     // The gap is not used once a part touches: the rest need no test.
                     hit = true;
                     break;
@@ -627,6 +686,29 @@ impl Scene {
         };
         advance(|t| touching(t, &mut parts), speed, resolution)
     }
+}
+
+/// Per sample along a body part's axis, the cell [`Scene::clearance`] last read for it
+/// (grid key) and that cell's distance (metres), if any.
+type ReadCells = Vec<Option<([i64; 3], f32)>>;
+
+/// A lower bound on the clearance ([`Scene::clearance`]) of the body part `c` (voxel edge
+/// `v` metres), given that the part's clearance was `g` at another pose from which no
+/// point of it has moved more than `moved` metres, and that every sampled cell lies in
+/// the field's box at both poses.
+///
+/// Each sample now lies within `moved` of the point of the axis at the same fraction
+/// then, which lies within half a sample spacing of a sample then; distances to occupied
+/// voxel centres are 1-Lipschitz, and a cell's stored distance is within half a cell
+/// diagonal `h` of the distance at any point of the cell, so the least sampled distance
+/// is at least the least then less `moved`, half the old spacing and `2 h`; the clearance
+/// takes off half the new spacing (at most `v / 2`) where the old clearance took off half
+/// the old one. The floor's gap is 1-Lipschitz in the motion. [`BOUND_SLACK`] covers the
+/// `f32` rounding of the stored distances, as in [`Scene::clearance_bound`].
+fn carried_bound(c: &Cylinder, g: f64, moved: f64, v: f64) -> f64 {
+    let half_diag = v * 3f64.sqrt() / 2.0;
+    let len = (c.b - c.a).norm();
+    g - moved - 2.0 * half_diag - v / 2.0 - BOUND_SLACK * (1.0 + g.abs() + moved + len + c.radius)
 }
 
 /// Conservative advancement and bisection: the first `t` in [0, 1] at which `touching(t)`
@@ -711,6 +793,60 @@ enum Side {
     Inside,
     /// Neither: GJK decides.
     Boundary,
+}
+
+/// The occupied voxels of a range of grid keys, with their centres, kept for one body
+/// part between the steps of a contact search ([`Scene::first_contact`]): a part crossing
+/// free space near a surface moves a quarter voxel per step, so its exact tests often ask
+/// for the same range, or one inside it, again; they filter these instead of walking the
+/// rows of the field. Filled anew from the field's rows when the range leaves it. (Ranges
+/// grown by one to three voxels, or grown the way the part moves, cost more to filter than
+/// the walks they save.)
+#[derive(Debug, Default)]
+struct NearVoxels {
+    /// The range, half-open `lo..hi` (grid keys); empty until filled.
+    lo: [i64; 3],
+    hi: [i64; 3],
+    /// Its occupied voxels' keys and centres (parry's `Voxels::voxel_center`, local frame).
+    voxels: Vec<([i64; 3], Vector)>,
+}
+
+impl NearVoxels {
+    /// Whether any occupied voxel of `field` (voxel edge `size`) in the range `lo..hi`
+    /// passes `test`, from the voxels kept (gathered anew unless the range lies in the
+    /// one kept). The voxels passed are the same as [`DistanceField::any_occupied`]'s,
+    /// in another order, so the answer is the same.
+    fn any(
+        &mut self,
+        field: &DistanceField,
+        lo: [i64; 3],
+        hi: [i64; 3],
+        size: Vector,
+        mut test: impl FnMut(Vector) -> bool,
+    ) -> bool {
+        let inside = (0..3).all(|a| self.lo[a] <= lo[a] && hi[a] <= self.hi[a]);
+        if !inside {
+            (self.lo, self.hi) = (lo, hi);
+            self.voxels.clear();
+            field.any_occupied(lo, hi, |k| {
+                self.voxels.push((k, voxel_centre(k, size)));
+                false
+            });
+        }
+        if (self.lo, self.hi) == (lo, hi) {
+            self.voxels.iter().any(|&(_, p)| test(p))
+        } else {
+            self.voxels
+                .iter()
+                .filter(|(k, _)| (0..3).all(|a| lo[a] <= k[a] && k[a] < hi[a]))
+                .any(|&(_, p)| test(p))
+        }
+    }
+}
+
+/// Parry's `Voxels::voxel_center` of the voxel with grid key `k` (edge `size`, local frame).
+fn voxel_centre(k: [i64; 3], size: Vector) -> Vector {
+    (ivect_to_vect(ivector(k)) + Vector::splat(0.5)) * size
 }
 
 /// A grid key as parry3d's voxel index (`i32` per axis), saturating. Keys count voxels
@@ -884,10 +1020,12 @@ const FIRST_PAD: usize = CHUNK / 4;
 const PAD_GROWTH: usize = 4;
 /// Squared distance (cells) standing for "no occupied cell in reach" in the passes.
 const FAR: f32 = 1e20;
-/// Largest field box (cells) whose first two passes are computed at once, densely (4 bytes
-/// a cell, and up to 4 more for the last pass's tiles where bodies ask): 2^25 cells, 256 MiB, a 1M-point room scan at 2 cm; there one
-/// pass over the box costs about a third of the instructions of computing its chunks with
-/// their borders. Larger boxes are computed in chunks where they are used.
+/// Largest field box (cells) whose passes are computed densely, in strips and tiles of
+/// whole columns where bodies ask (up to 4 bytes a cell for the first two passes' strips,
+/// and up to 4 more for the last pass's tiles): 2^25 cells, 256 MiB, a 1M-point room scan
+/// at 2 cm; there one pass over the box costs about a third of the instructions of
+/// computing its chunks with their borders. Larger boxes are computed in chunks where
+/// they are used.
 const DENSE_CELLS: usize = 1 << 25;
 /// Most chunks kept at once: 512 MiB of distances. A 1M-point room scan at 2 cm touches
 /// about a fifth of that; past it, distances are computed cell by cell and not kept, so
@@ -950,7 +1088,8 @@ struct DistanceField {
     /// Chunks computed and kept so far.
     kept: AtomicUsize,
     /// The distances of a box of at most [`DENSE_CELLS`]: its first two passes computed
-    /// at once, the last one in tiles of columns where asked; `None` for a larger box (then
+    /// in strips of columns, the last one in tiles of columns, where asked; `None` for a
+    /// larger box (then
     /// `chunks` holds them).
     dense: Option<dense::Columns>,
 }
@@ -1048,7 +1187,7 @@ impl DistanceField {
     fn get(&self, k: [i64; 3]) -> Option<f32> {
         let o = self.offsets(k)?;
         if let Some(d) = &self.dense {
-            return Some(d.get(o));
+            return Some(d.get(self, o));
         }
         let c = o.map(|i| i / CHUNK);
         let [cnx, cny, _] = self.chunk_dims;
@@ -1314,22 +1453,24 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
     v[0] = first;
     z[0] = f32::NEG_INFINITY;
     z[1] = f32::INFINITY;
-    for q in first + 1..n {
-        if f[q] == FAR {
+    for (q, &fq) in f.iter().enumerate().skip(first + 1) {
+        if fq == FAR {
             continue;
         }
+        // The new parabola's terms, as the intersection below computes them.
+        let (hq, q2) = (fq + (q * q) as f32, 2.0 * q as f32);
         loop {
             let p = v[k];
-            let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32))
-                / (2.0 * q as f32 - 2.0 * p as f32);
-            if s <= z[k] && k > 0 {
+            let s = (hq - (f[p] + (p * p) as f32)) / (q2 - 2.0 * p as f32);
+            if s <= z[k] {
+                if k == 0 {
+                    // The new parabola dominates from -inf: replace.
+                    v[0] = q;
+                    z[0] = f32::NEG_INFINITY;
+                    z[1] = f32::INFINITY;
+                    break;
+                }
                 k -= 1;
-            } else if s <= z[k] {
-                // k == 0 and the new parabola dominates from -inf: replace.
-                v[0] = q;
-                z[0] = f32::NEG_INFINITY;
-                z[1] = f32::INFINITY;
-                break;
             } else {
                 k += 1;
                 v[k] = q;
@@ -1353,78 +1494,128 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
 
 mod dense {
     //! The dense exact transform, for boxes small enough to hold at once
-    //! ([`DENSE_CELLS`]): the passes along x and y over the whole box, the pass along z
-    //! per tile of columns where asked; faster than chunks there; the chunked field equals
-    //! it bit for bit.
+    //! ([`DENSE_CELLS`]): the passes along x and y per strip of columns, the pass along z
+    //! per tile of columns, each where first asked; faster than chunks there; the chunked
+    //! field equals it bit for bit.
     use super::*;
 
     /// Edge of a tile of columns, cells: the unit in which the last pass (along z) is
-    /// computed and kept. 8 x 8 columns (0.16 m square at 2 cm) is finer than a limb, so
+    /// computed and kept, and the width (along x) of the strips the first two passes are
+    /// computed in. 8 x 8 columns (0.16 m square at 2 cm) is finer than a limb, so
     /// little is computed that no body asks for, and coarse enough that the tiles' slots
     /// (one `OnceLock` each) cost nothing beside the grid.
     const TILE: usize = 8;
 
     /// The exact distance field of a box of at most [`DENSE_CELLS`]: the first two passes
-    /// of the transform (along x, then y) over the whole box, and the last one (along z,
-    /// which reads only its own column) per tile of [`TILE`] x [`TILE`] columns, on first
-    /// use. Every value equals [`dense_distances`] of the box, bit for bit.
+    /// of the transform (along x, then y) per strip of [`TILE`] columns along x (every y
+    /// and z), and the last one (along z, which reads only its own column) per tile of
+    /// [`TILE`] x [`TILE`] columns, each on first use. A line along y reads only its own
+    /// (x, z) and the rows along x it crosses, so a strip's values are those of the passes
+    /// over the whole box. Every value equals [`dense_distances`] of the box, bit for bit.
     #[derive(Debug)]
     pub(super) struct Columns {
         /// Cells along x, y, z.
         dims: [usize; 3],
         /// Voxel edge, metres, in the precision of the stored distances.
         voxel: f32,
-        /// Squared distances (cells) after the passes along x and y, z-major
-        /// (`(z * ny + y) * nx + x`).
-        planes: Vec<f32>,
-        /// Tiles along x.
+        /// Per z slab, whether it holds an occupied cell: a slab without one is [`FAR`]
+        /// after the passes along x and y (the transform of a constant FAR line is FAR).
+        slab_used: Vec<bool>,
+        /// Tiles along x (and strips).
         tiles_x: usize,
+        /// Squared distances (cells) after the passes along x and y per strip (`tx`),
+        /// laid out `(z * ny + y) * TILE + x % TILE`; computed on first use.
+        strips: Vec<OnceLock<Box<[f32]>>>,
         /// Distances (metres) per tile (`ty * tiles_x + tx`), laid out
         /// `(z * TILE + y) * TILE + x` within it; computed on first use.
         tiles: Vec<OnceLock<Box<[f32]>>>,
     }
 
     impl Columns {
-        /// The first two passes over the box `min .. min + dims` of the occupied voxel
-        /// `keys`, voxel edge `v` metres.
+        /// The slots of the box `min .. min + dims` of the occupied voxel `keys`, voxel
+        /// edge `v` metres; nothing is computed yet.
         pub(super) fn new(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]], v: f64) -> Columns {
             let tiles_x = dims[0].div_ceil(TILE);
             let tiles = (0..tiles_x * dims[1].div_ceil(TILE))
                 .map(|_| OnceLock::new())
                 .collect();
+            let mut slab_used = vec![false; dims[2]];
+            for k in keys {
+                if let Some(u) = slab_used.get_mut(offset(k[2] - min[2])) {
+                    *u = true;
+                }
+            }
             Columns {
                 dims,
                 voxel: to_f32(v),
-                planes: planes(min, dims, keys),
+                slab_used,
                 tiles_x,
+                strips: (0..tiles_x).map(|_| OnceLock::new()).collect(),
                 tiles,
             }
         }
 
-        /// The distance (metres) at offsets `o` (inside the box). Inlined into the
-        /// field's reads, the hot path of the contact search (left to itself, the
-        /// compiler's choice follows how the crate is split into codegen units).
+        /// The distance (metres) at offsets `o` (inside the box), the occupied rows read
+        /// from `field` (the field this is part of). Inlined into the field's reads, the
+        /// hot path of the contact search (left to itself, the compiler's choice follows
+        /// how the crate is split into codegen units).
         #[inline]
-        pub(super) fn get(&self, o: [usize; 3]) -> f32 {
+        pub(super) fn get(&self, field: &DistanceField, o: [usize; 3]) -> f32 {
             let (tx, ty) = (o[0] / TILE, o[1] / TILE);
-            let tile = self.tiles[ty * self.tiles_x + tx].get_or_init(|| self.tile(tx, ty));
+            let tile = self.tiles[ty * self.tiles_x + tx].get_or_init(|| self.tile(field, tx, ty));
             tile[(o[2] * TILE + o[1] % TILE) * TILE + o[0] % TILE]
         }
 
-        /// The last pass over the columns of tile `(tx, ty)`.
-        fn tile(&self, tx: usize, ty: usize) -> Box<[f32]> {
+        /// The passes along x and y over the columns of strip `tx` (x from `tx * TILE`,
+        /// every y and z): per used slab, each occupied row's nearest occupied cell for the
+        /// strip's x ([`nearest_in_list`], the exact squared distances of the pass along
+        /// x; rows without one stay [`FAR`]), then the transform of each line along y.
+        fn strip(&self, field: &DistanceField, tx: usize) -> Box<[f32]> {
             let [nx, ny, nz] = self.dims;
+            let x0 = tx * TILE;
+            let w = TILE.min(nx - x0);
+            let mut out = vec![FAR; nz * ny * TILE].into_boxed_slice();
+            // The strip's lines along y of one slab, `xi * ny + y`.
+            let mut lines = vec![FAR; TILE * ny];
+            let mut near = [FAR; TILE];
+            let (mut d, mut vs, mut zs) = (vec![0f32; ny], vec![0usize; ny], vec![0f32; ny + 1]);
+            for z in 0..nz {
+                if !self.slab_used[z] {
+                    continue;
+                }
+                lines.fill(FAR);
+                for (y, xs) in field.rows_at(z, 0, ny) {
+                    near.fill(FAR);
+                    nearest_in_list(xs, x0, &mut near[..w]);
+                    for (xi, &q) in near[..w].iter().enumerate() {
+                        lines[xi * ny + y] = q;
+                    }
+                }
+                for xi in 0..w {
+                    edt_1d(&lines[xi * ny..(xi + 1) * ny], &mut d, &mut vs, &mut zs);
+                    for (y, &q) in d.iter().enumerate() {
+                        out[(z * ny + y) * TILE + xi] = q;
+                    }
+                }
+            }
+            out
+        }
+
+        /// The last pass over the columns of tile `(tx, ty)`, from its strip.
+        fn tile(&self, field: &DistanceField, tx: usize, ty: usize) -> Box<[f32]> {
+            let [nx, ny, nz] = self.dims;
+            let strip = self.strips[tx].get_or_init(|| self.strip(field, tx));
             let mut out = vec![f32::INFINITY; nz * TILE * TILE].into_boxed_slice();
             let (mut f, mut d) = (vec![0f32; nz], vec![0f32; nz]);
             let (mut vs, mut zs) = (vec![0usize; nz], vec![0f32; nz + 1]);
             for y in ty * TILE..((ty + 1) * TILE).min(ny) {
-                for x in tx * TILE..((tx + 1) * TILE).min(nx) {
+                for xi in 0..TILE.min(nx - tx * TILE) {
                     for (z, fz) in f.iter_mut().enumerate() {
-                        *fz = self.planes[(z * ny + y) * nx + x];
+                        *fz = strip[(z * ny + y) * TILE + xi];
                     }
                     edt_1d(&f, &mut d, &mut vs, &mut zs);
                     for (z, &q) in d.iter().enumerate() {
-                        out[(z * TILE + y % TILE) * TILE + x % TILE] = distance(q, self.voxel);
+                        out[(z * TILE + y % TILE) * TILE + xi] = distance(q, self.voxel);
                     }
                 }
             }
@@ -1473,7 +1664,9 @@ mod dense {
 
     /// The first two passes of the transform (along x, then y) of the occupied voxel
     /// `keys` over the box `min .. min + dims`: squared distances in cells, z-major
-    /// (`(z * ny + y) * nx + x`), [`FAR`] where a slab has no occupied cell.
+    /// (`(z * ny + y) * nx + x`), [`FAR`] where a slab has no occupied cell. The
+    /// reference [`Columns`]' strips equal.
+    #[cfg(test)]
     fn planes(min: [i64; 3], dims: [usize; 3], keys: &[[i64; 3]]) -> Vec<f32> {
         use rayon::prelude::*;
         let [nx, ny, nz] = dims;
@@ -1526,6 +1719,7 @@ mod dense {
     /// Squared distances (in cells) along a row of 0 (occupied) and FAR cells to its nearest
     /// occupied cell, in place; a row without one stays FAR. Equal, bit for bit, to
     /// [`edt_1d`] of the row (both are exact: squared distances are small integers in f32).
+    #[cfg(test)]
     pub(super) fn nearest_in_row(row: &mut [f32]) {
         let mut last = None;
         for (x, d) in row.iter_mut().enumerate() {
@@ -1773,11 +1967,12 @@ mod tests {
             let whole = DistanceField::new(min, dims, &keys, 0.02);
             let [nx, ny, nz] = dims;
             let columns = whole.dense.as_ref().unwrap();
+            let columns = |o: [usize; 3]| columns.get(&whole, o);
             for y in 0..ny {
                 for z in 0..nz {
                     for x in 0..nx {
                         let w = want[(y * nz + z) * nx + x];
-                        assert_eq!(columns.get([x, y, z]).to_bits(), w.to_bits(), "seed {seed}");
+                        assert_eq!(columns([x, y, z]).to_bits(), w.to_bits(), "seed {seed}");
                     }
                 }
             }
@@ -2020,6 +2215,7 @@ mod tests {
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         let (mut hits, mut misses) = (0, 0);
+        let mut near = NearVoxels::default();
         for i in 0..4000 {
             let a = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, next() * 0.9);
             let mut d = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * next();
@@ -2036,8 +2232,28 @@ mod tests {
             };
             let want = s.intersects_parry(&c);
             assert_eq!(s.intersects(&c), want, "{c:?}");
-            let centres = s.clearance_and_centres(&c).1;
-            assert_eq!(s.intersects_near(&c, centres), want, "{c:?}");
+            let centres = s.clearance_and_centres(&c, &mut Vec::new()).1;
+            assert_eq!(s.intersects_near(&c, centres, None), want, "{c:?}");
+            // From the voxels kept near the cylinder before, and near one nudged a few
+            // millimetres (within the kept box, or filling it anew).
+            assert_eq!(
+                s.intersects_near(&c, centres, Some(&mut near)),
+                want,
+                "{c:?}"
+            );
+            let shift = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.01;
+            let moved = Cylinder {
+                a: c.a + shift,
+                b: c.b + shift,
+                ..c
+            };
+            let moved_want = s.intersects_parry(&moved);
+            let centres = s.clearance_and_centres(&moved, &mut Vec::new()).1;
+            assert_eq!(
+                s.intersects_near(&moved, centres, Some(&mut near)),
+                moved_want,
+                "{moved:?}"
+            );
             if want {
                 hits += 1;
             } else {
@@ -2097,21 +2313,74 @@ mod tests {
             let mut state = 99u64;
             let mut next = || uniform(&mut state);
             let (mut bounded, mut near) = (0, 0);
+            let (mut carried, mut tight) = (0, 0);
             for _ in 0..20000 {
                 // Around and beyond the field's box (0.2 m past the voxels).
                 let a = Point3::new(next() * 2.4 - 0.8, next() * 1.4 - 0.4, next() * 1.4 - 0.2);
                 let c = random_cylinder(&mut next, a);
                 let g = s.clearance(&c);
                 assert_eq!(g.to_bits(), clearance_reference(&s, &c).to_bits(), "{c:?}");
-                if let Some(b) = s.clearance_bound(&c) {
+                if let Some(b) = s.clearance_bound(&c, None) {
                     assert!(b <= g, "bound {b} over clearance {g}: {c:?}");
                     bounded += 1;
                     near += usize::from(g - b < 0.1);
+                } else {
+                    continue;
                 }
+                // The part turned about a point near it and shifted, by up to a few
+                // centimetres: its clearance there against the bound carried from here.
+                let pivot = a + Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.6;
+                let axis = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5);
+                // Half of them by under 2 mm (crossing a cell face moves the sampled
+                // cells' distances most for the least motion).
+                let scale = if next() < 0.5 { 0.05 } else { 1.0 };
+                let angle = next() * next() * 0.1 * scale;
+                let shift =
+                    Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * next() * 0.04 * scale;
+                let turn = nalgebra::Rotation3::from_axis_angle(
+                    &nalgebra::Unit::new_normalize(axis),
+                    angle,
+                );
+                let pose = |p: Point3<f64>| pivot + turn * (p - pivot) + shift;
+                let moved_part = Cylinder {
+                    a: pose(c.a),
+                    b: pose(c.b),
+                    ..c
+                };
+                // Every point of the part moves at most the shift plus the angle times
+                // its distance from the pivot (an arc is longer than its chord).
+                let lever = (c.a - pivot).norm().max((c.b - pivot).norm()) + c.radius;
+                let moved = shift.norm() + angle * lever;
+                let Some(b) = s.clearance_bound(&moved_part, Some((g, moved))) else {
+                    continue;
+                };
+                let g2 = s.clearance(&moved_part);
+                // The same bits with the cells read for the part before it moved.
+                let mut read = Vec::new();
+                s.clearance_and_centres(&c, &mut read);
+                let (fresh, kept) = (
+                    s.clearance_and_centres(&moved_part, &mut Vec::new()),
+                    s.clearance_and_centres(&moved_part, &mut read),
+                );
+                assert_eq!(
+                    (kept.0.to_bits(), kept.1.to_bits()),
+                    (fresh.0.to_bits(), fresh.1.to_bits())
+                );
+                assert!(b <= g2, "carried {b} over clearance {g2}: {moved_part:?}");
+                assert!(
+                    carried_bound(&moved_part, g, moved, s.voxel) <= g2,
+                    "{moved_part:?}"
+                );
+                carried += 1;
+                tight += usize::from(g2 - carried_bound(&moved_part, g, moved, s.voxel) < 0.06);
             }
             assert!(
                 bounded > 5000 && near > 1000,
                 "{bounded} bounded, {near} near"
+            );
+            assert!(
+                carried > 4000 && tight > 100,
+                "{carried} carried, {tight} tight"
             );
         }
     }
@@ -2179,7 +2448,7 @@ mod tests {
         for _ in 0..3000 {
             let a = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, next() * 0.9);
             let c = random_cylinder(&mut next, a);
-            let bound = s.clearance_and_centres(&c).1;
+            let bound = s.clearance_and_centres(&c, &mut Vec::new()).1;
             if bound == f64::NEG_INFINITY {
                 continue;
             }
@@ -2204,8 +2473,9 @@ mod tests {
             let mut state = 7u64;
             let mut next = || uniform(&mut state);
             let (mut hits, mut misses) = (0, 0);
-            for _ in 0..300 {
-                // A body of 2 to 8 parts moved along a straight line from above the scene.
+            for case in 0..300 {
+                // A body of 2 to 8 parts moved along a straight line from above the scene,
+                // every other one turning about a point near it as well.
                 let n = 2 + to_usize(next() * 7.0);
                 let base = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, 0.5 + next());
                 let parts: Vec<Cylinder> = (0..n)
@@ -2221,15 +2491,33 @@ mod tests {
                     })
                     .collect();
                 let dir = Vector3::new(next() - 0.5, next() - 0.5, -next() * 2.0);
+                let pivot = base + Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.4;
+                let axis = nalgebra::Unit::new_normalize(Vector3::new(
+                    next() - 0.5,
+                    next() - 0.5,
+                    next() - 0.5,
+                ));
+                let angle = if case % 2 == 1 {
+                    (next() - 0.5) * 3.0
+                } else {
+                    0.0
+                };
                 let motion = |t: f64, out: &mut Vec<Cylinder>| {
+                    let turn = nalgebra::Rotation3::from_axis_angle(&axis, angle * t);
+                    let pose = |p: Point3<f64>| pivot + turn * (p - pivot) + dir * t;
                     out.clear();
                     out.extend(parts.iter().map(|c| Cylinder {
-                        a: c.a + dir * t,
-                        b: c.b + dir * t,
+                        a: pose(c.a),
+                        b: pose(c.b),
                         ..*c
                     }));
                 };
-                let speed = dir.norm();
+                // The shift, and the turn times the farthest point from the pivot.
+                let lever = parts
+                    .iter()
+                    .map(|c| (c.a - pivot).norm().max((c.b - pivot).norm()) + c.radius)
+                    .fold(0.0, f64::max);
+                let speed = dir.norm() + angle.abs() * lever;
                 let want = first_contact_reference(&s, motion, speed, 0.005);
                 let got = s.first_contact(motion, speed, 0.005);
                 assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits));
