@@ -606,7 +606,9 @@ pub fn check_units(cloud: &PointCloud) -> Option<String> {
         return None;
     }
     let diag = (extent.hi - extent.lo).norm();
-    if !diag.is_finite() {
+    // Both warnings need more than `CM_DIAGONAL` units across: a cloud within that is
+    // metres whatever its spacing, so the spacing is not measured.
+    if !diag.is_finite() || diag <= CM_DIAGONAL {
         return None;
     }
     let spacing = spacing::neighbour_distance(cloud, &extent, 1, UNITS_QUERIES)?;
@@ -618,7 +620,7 @@ pub fn check_units(cloud: &PointCloud) -> Option<String> {
             diag * 0.001,
             diag * 0.01
         ))
-    } else if diag > 20.0 && spacing >= 0.2 {
+    } else if diag > CM_DIAGONAL && spacing >= 0.2 {
         Some(format!(
             "the cloud is {diag:.0} units across with points about {spacing:.2} apart: it \
              looks like centimetres ({:.2} m across), not metres (give the units, e.g. --units cm)",
@@ -628,6 +630,10 @@ pub fn check_units(cloud: &PointCloud) -> Option<String> {
         None
     }
 }
+
+/// Diagonal (in the file's units) above which [`check_units`] suspects centimetres: a
+/// room read as metres is under 20 m across, in centimetres several hundred.
+const CM_DIAGONAL: f64 = 20.0;
 
 /// Points whose nearest-neighbour distance [`check_units`] measures.
 const UNITS_QUERIES: usize = 200;
@@ -1012,6 +1018,9 @@ mod tests {
                 .collect(),
         );
         assert_eq!(check_units(&site), None);
+        // Under 20 units across is metres however sparse: a 10 m yard sampled every metre.
+        let yard = PointCloud::new(rect(0.0, 10.0, 0.0, 5.0, 0.0, 1.0));
+        assert_eq!(check_units(&yard), None);
     }
 }
 
