@@ -620,7 +620,7 @@ pub fn check_units(cloud: &PointCloud) -> Option<String> {
             diag * 0.001,
             diag * 0.01
         ))
-    } else if diag > CM_DIAGONAL && spacing >= 0.2 {
+    } else if spacing >= 0.2 {
         Some(format!(
             "the cloud is {diag:.0} units across with points about {spacing:.2} apart: it \
              looks like centimetres ({:.2} m across), not metres (give the units, e.g. --units cm)",
