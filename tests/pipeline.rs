@@ -415,3 +415,20 @@ fn a_stool_and_a_bed_above_knee_height_are_perched_on() {
     let o = run(&cloud(&[table]), 1.75);
     assert!(affords(&o).is_empty(), "0.72 m table top: {:?}", o.stats);
 }
+
+/// A bed's headboard is beside a body sitting on the bed's edge, not behind it
+/// (docs/conventions.md, "Beds and headboards"): a double bed with a headboard 0.5 m above
+/// the mattress, whole and against nothing, gives sitting and no backrest. Agents at the
+/// head-end corner, turned onto the headboard, found one until the backrest node's `rear`
+/// rule: in front of a headboard the mattress goes on for a body's length.
+#[test]
+fn a_headboard_is_no_backrest() {
+    let double = bed(&BedParams::default());
+    let o = run(&cloud(&[double]), 1.75);
+    assert_eq!(
+        affords(&o),
+        ["sitting"],
+        "bed with headboard: {:?}",
+        o.stats
+    );
+}

@@ -16,6 +16,11 @@ use crate::model::agent::{Agent, Cylinder, FkCache, Placement, Posture};
 use crate::model::hierarchy::{Fallback, Hierarchy, Node, Spread};
 use crate::num::to_usize;
 
+/// Least length of the horizontal part of a unit contact normal for the `rear` rule to
+/// read a direction from it: sin 30 degrees, a normal within 60 degrees of vertical (the
+/// top of a seat, a slope) says nothing about what lies in front of the body.
+const REAR_MIN_HORIZONTAL: f64 = 0.5;
+
 /// The outcome of one node.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NodeOutcome {
@@ -150,7 +155,7 @@ pub fn unfold(
 /// the scene, where the body stands, the node, and how finely contact is located. Each
 /// rule of the node ([`clamp`](Self::clamp), [`spread`](Self::spread),
 /// [`free_start`](Self::free_start), [`release`](Self::release),
-/// [`support`](Self::support)) is one method.
+/// [`support`](Self::support), [`rear`](Self::rear)) is one method.
 pub struct NodeContext<'a> {
     /// The body.
     pub agent: &'a Agent,
@@ -226,6 +231,40 @@ impl NodeContext<'_> {
             self.scene
                 .contact_normal(c)
                 .is_some_and(|n| n.dot(&dir) >= self.h.score.support_cos)
+        })
+    }
+
+    /// `rear`: whether every part of `parts` that touches the scene stands at the rear of
+    /// the seat: from the root joint (the placement's position), along the horizontal part
+    /// of the contact's normal ([`Scene::contact_normal`], pointing away from what was
+    /// touched), the scene stops holding a surface within the rule's `gap` below the root
+    /// joint before the rule's `reach` (fraction of H). A contact whose normal is nearly
+    /// vertical has no such direction and passes. True when the node has no `rear` rule.
+    pub fn rear(&self, parts: &[Cylinder]) -> bool {
+        let Some(rule) = self.node.rear else {
+            return true;
+        };
+        let reach = rule.reach * self.agent.height;
+        let step = self.scene.voxel_size();
+        parts.iter().filter(|c| self.scene.touches(c)).all(|c| {
+            let Some(n) = self.scene.contact_normal(c) else {
+                return true;
+            };
+            let flat = nalgebra::Vector3::new(n.x, n.y, 0.0);
+            // Within 60 degrees of vertical, the normal says little about "in front".
+            if flat.norm() < REAR_MIN_HORIZONTAL {
+                return true;
+            }
+            let ahead = flat.normalize();
+            let from = self.place.position;
+            let mut s = step;
+            while s <= reach {
+                if self.scene.drop_below(&(from + ahead * s), rule.gap) > rule.gap {
+                    return true;
+                }
+                s += step;
+            }
+            false
         })
     }
 
@@ -425,6 +464,13 @@ impl NodeContext<'_> {
             let mut parts = Vec::new();
             motion(t, &mut parts);
             if !self.release(&parts) {
+                blocked = hit.take();
+            }
+        }
+        if let (Some(t), Some(_)) = (hit, node.rear) {
+            let mut parts = Vec::new();
+            motion(t, &mut parts);
+            if !self.rear(&parts) {
                 blocked = hit.take();
             }
         }
@@ -811,6 +857,59 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         assert!(c.free_start(Some(0.0)));
         assert!(!c.free_start(Some(0.3)));
         assert!(!c.free_start(None));
+    }
+
+    #[test]
+    fn rear_accepts_a_chair_back_and_refuses_a_headboard() {
+        use crate::model::hierarchy::Rear;
+        let (a, h) = models();
+        // A back (the plane x = 0, 0.45-1.0 m high, 0.6 m wide) with a surface at 0.45 m
+        // in front of it running `length` cm along +x, as points 1 cm apart.
+        let scene = |length: usize| {
+            let mut pts = Vec::new();
+            for j in 0..=60 {
+                let y = -0.3 + j as f64 * 0.01;
+                for i in 0..=length {
+                    pts.push(Point3::new(i as f64 * 0.01, y, 0.45));
+                }
+                for k in 45..=100 {
+                    pts.push(Point3::new(0.0, y, k as f64 * 0.01));
+                }
+            }
+            Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene)
+        };
+        let (chair, bed) = (scene(45), scene(200));
+        // The pelvis 8 cm above the seat, 0.15 m in front of the back, facing +x; a trunk
+        // leaning 1 cm into the back.
+        let p = Placement {
+            position: Point3::new(0.15, 0.0, 0.53),
+            yaw: 0.0,
+        };
+        let r = 0.05;
+        let trunk = Cylinder {
+            joint: 1,
+            a: Point3::new(0.01 + r - 0.01, 0.0, 0.6),
+            b: Point3::new(0.01 + r - 0.01, 0.0, 0.9),
+            radius: r,
+        };
+        assert!(chair.touches(&trunk) && bed.touches(&trunk));
+        let mut node = h.nodes[0].clone();
+        // The stick is 1 m tall: the seat may go on 0.45 m in front of the pelvis.
+        node.rear = Some(Rear {
+            reach: 0.45,
+            gap: 0.2,
+        });
+        assert!(with(&a, &h, &chair, &p, &node).rear(&[trunk]));
+        assert!(!with(&a, &h, &bed, &p, &node).rear(&[trunk]));
+        // A part that touches nothing, or a node without the rule, is not refused.
+        let away = Cylinder {
+            a: trunk.a + Vector3::new(0.5, 0.0, 0.0),
+            b: trunk.b + Vector3::new(0.5, 0.0, 0.0),
+            ..trunk
+        };
+        assert!(with(&a, &h, &bed, &p, &node).rear(&[away]));
+        node.rear = None;
+        assert!(with(&a, &h, &bed, &p, &node).rear(&[trunk]));
     }
 
     #[test]

@@ -227,6 +227,23 @@ pub struct Node {
     /// What the node finds lies beside the body, not across in front of it (`None`: no
     /// such test).
     pub beside: Option<Beside>,
+    /// What the node finds stands at the rear of a seat, not at the head of a bed (`None`:
+    /// no such test).
+    pub rear: Option<Rear>,
+}
+
+/// A node's `rear` rule: a contact counts only if, from the root joint along the
+/// horizontal part of the contact's normal (away from what was touched: forwards, for a
+/// back behind the trunk), the surface the body sits on ends within `reach`. A seat ends
+/// a thigh's length or so in front of its back; in front of a bed's headboard, or a bunk
+/// bed's post, the mattress goes on for a body's length, and sitting with the back
+/// against it puts the legs on the mattress (the conventions' bed rule).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rear {
+    /// Fraction of the body height H: how far in front of the root joint the seat may go on.
+    pub reach: f64,
+    /// Metres below the root joint within which the scene counts as the seat going on.
+    pub gap: f64,
 }
 
 /// A node's `beside` rule: a contact counts only if, over the body's midplane along the
@@ -416,6 +433,15 @@ struct NodeFile {
     unseen_reach: Option<f64>,
     #[serde(default)]
     beside: Option<BesideFile>,
+    #[serde(default)]
+    rear: Option<RearFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RearFile {
+    reach: f64,
+    gap: f64,
 }
 
 #[derive(Deserialize)]
@@ -972,15 +998,29 @@ fn resolve_node(
         None => None,
         Some(b) => {
             // A gap of a metre or more below a forearm is no longer "across in front of it".
-            if !(b.gap >= 0.0 && b.gap < 1.0) {
+            Some(Beside {
+                gap: gap_under_a_metre(src, &key.key("beside").key("gap"), b.gap)?,
+                over: names.link(&key.key("beside").key("over"), &b.over)?,
+            })
+        }
+    };
+    let rear = match &n.rear {
+        None => None,
+        Some(r) => {
+            // Beyond a body height the rule could never refuse a contact in a room.
+            if !(r.reach > 0.0 && r.reach <= 1.0) {
                 return Err(src.invalid(
-                    &key.key("beside").key("gap"),
-                    format!("must be 0 or more and under 1 metre, not {}", b.gap),
+                    &key.key("rear").key("reach"),
+                    format!(
+                        "must be over 0 and at most 1 (a fraction of H), not {}",
+                        r.reach
+                    ),
                 ));
             }
-            Some(Beside {
-                gap: b.gap,
-                over: names.link(&key.key("beside").key("over"), &b.over)?,
+            // A metre below the pelvis is the floor under any seat.
+            Some(Rear {
+                reach: r.reach,
+                gap: gap_under_a_metre(src, &key.key("rear").key("gap"), r.gap)?,
             })
         }
     };
@@ -1159,7 +1199,20 @@ fn resolve_node(
         support_share: n.support_share,
         unseen_reach: n.unseen_reach,
         beside,
+        rear,
     })
+}
+
+/// A node rule's gap (`beside`, `rear`), metres: 0 or more and under 1, else an error at `key`.
+fn gap_under_a_metre(src: Source, key: &Key, gap: f64) -> Result<f64, ModelError> {
+    if (0.0..1.0).contains(&gap) {
+        Ok(gap)
+    } else {
+        Err(src.invalid(
+            key,
+            format!("must be 0 or more and under 1 metre, not {gap}"),
+        ))
+    }
 }
 
 /// Resolves the joint of a `spread` or `fallback` entry (`key` locates the entry) and
@@ -1587,6 +1640,19 @@ mod tests {
         );
         let (e, line) = edited("facing_tolerance = 0.05", "facing_tolerance = -0.05");
         names(&e, line, "hypothesis.facing_tolerance", "-0.05");
+    }
+
+    #[test]
+    fn a_bad_rear_rule_is_named() {
+        let rule = "rear = { reach = 0.45, gap = 0.20 }";
+        assert_eq!(BUILTIN_SITTING.matches(rule).count(), 1);
+        let backrest = &load(BUILTIN_SITTING).unwrap().nodes[2];
+        assert_eq!(backrest.id, "backrest");
+        assert_eq!(backrest.rear.map(|r| (r.reach, r.gap)), Some((0.45, 0.2)));
+        let (e, line) = edited(rule, "rear = { reach = 1.5, gap = 0.20 }");
+        names(&e, line, "node.backrest.rear.reach", "at most 1");
+        let (e, line) = edited(rule, "rear = { reach = 0.45, gap = -0.1 }");
+        names(&e, line, "node.backrest.rear.gap", "under 1 metre");
     }
 
     #[test]
