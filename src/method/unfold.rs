@@ -21,6 +21,11 @@ use crate::num::to_usize;
 /// top of a seat, a slope) says nothing about what lies in front of the body.
 const REAR_MIN_HORIZONTAL: f64 = 0.5;
 
+/// How far above a part's underside the `narrow` rule probes what lies below, metres:
+/// half a voxel, so that the surface the part rests on (touching it, or up to a voxel into
+/// it) is below the probe.
+const NARROW_PROBE_LIFT: f64 = 0.01;
+
 /// The outcome of one node.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NodeOutcome {
@@ -155,7 +160,8 @@ pub fn unfold(
 /// the scene, where the body stands, the node, and how finely contact is located. Each
 /// rule of the node ([`clamp`](Self::clamp), [`spread`](Self::spread),
 /// [`free_start`](Self::free_start), [`release`](Self::release),
-/// [`support`](Self::support), [`rear`](Self::rear)) is one method.
+/// [`support`](Self::support), [`rear`](Self::rear), [`narrow`](Self::narrow)) is one
+/// method.
 pub struct NodeContext<'a> {
     /// The body.
     pub agent: &'a Agent,
@@ -263,6 +269,45 @@ impl NodeContext<'_> {
                     return true;
                 }
                 s += step;
+            }
+            false
+        })
+    }
+
+    /// `narrow`: whether every part of `parts` that touches the scene rests on something
+    /// that ends beside the body: from the part's middle, at its underside, outwards (away
+    /// from the body's midplane, level), the scene stops lying within the node's
+    /// `support_gap` below before the rule's width (fraction of H). An armrest is a rest
+    /// for one arm; a table top or a bed beside a body turned on its seat goes on.
+    /// True when the node has no `narrow` rule.
+    pub fn narrow(&self, parts: &[Cylinder]) -> bool {
+        let Some(width) = self.node.narrow else {
+            return true;
+        };
+        let width = width * self.agent.height;
+        let gap = self.node.support_gap;
+        let step = self.scene.voxel_size();
+        let (s, c) = self.place.yaw.sin_cos();
+        let left = nalgebra::Vector3::new(-s, c, 0.0);
+        parts.iter().filter(|p| self.scene.touches(p)).all(|p| {
+            let mid = nalgebra::center(&p.a, &p.b);
+            let out = if (mid - self.place.position).dot(&left) >= 0.0 {
+                left
+            } else {
+                -left
+            };
+            // Just above the underside, so that what the part rests on is below the probe.
+            let from = nalgebra::Point3::new(
+                mid.x,
+                mid.y,
+                p.a.z.min(p.b.z) - p.radius + NARROW_PROBE_LIFT,
+            );
+            let mut d = step;
+            while d <= width {
+                if self.scene.drop_below(&(from + out * d), gap) > gap {
+                    return true;
+                }
+                d += step;
             }
             false
         })
@@ -471,6 +516,13 @@ impl NodeContext<'_> {
             let mut parts = Vec::new();
             motion(t, &mut parts);
             if !self.rear(&parts) {
+                blocked = hit.take();
+            }
+        }
+        if let (Some(t), Some(_)) = (hit, node.narrow) {
+            let mut parts = Vec::new();
+            motion(t, &mut parts);
+            if !self.narrow(&parts) {
                 blocked = hit.take();
             }
         }
@@ -764,6 +816,14 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         }
     }
 
+    /// The pelvis 8 cm above a seat at 0.45 m, at `x` on the x axis, facing +x.
+    fn seated(x: f64) -> Placement {
+        Placement {
+            position: Point3::new(x, 0.0, 0.53),
+            yaw: 0.0,
+        }
+    }
+
     fn with<'a>(
         agent: &'a Agent,
         h: &'a Hierarchy,
@@ -879,12 +939,8 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
             Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene)
         };
         let (chair, bed) = (scene(45), scene(200));
-        // The pelvis 8 cm above the seat, 0.15 m in front of the back, facing +x; a trunk
-        // leaning 1 cm into the back.
-        let p = Placement {
-            position: Point3::new(0.15, 0.0, 0.53),
-            yaw: 0.0,
-        };
+        // The pelvis 0.15 m in front of the back; a trunk leaning 1 cm into the back.
+        let p = seated(0.15);
         let r = 0.05;
         let trunk = Cylinder {
             joint: 1,
@@ -910,6 +966,55 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         assert!(with(&a, &h, &bed, &p, &node).rear(&[away]));
         node.rear = None;
         assert!(with(&a, &h, &bed, &p, &node).rear(&[trunk]));
+    }
+
+    #[test]
+    fn narrow_accepts_an_arm_and_refuses_a_table_beside() {
+        let (a, h) = models();
+        // A top at 0.70 m on the body's left (`side` 1: +y) or right (-1) from |y| = 0.20 to
+        // `to_cm` cm, x -0.2 to 0.4, as points 1 cm apart: an arm 0.10 m wide, or a table
+        // 1 m wide.
+        let scene = |to_cm: usize, side: f64| {
+            let mut pts = Vec::new();
+            for i in 0..=60 {
+                for j in 20..=to_cm {
+                    pts.push(Point3::new(
+                        -0.2 + i as f64 * 0.01,
+                        side * j as f64 * 0.01,
+                        0.70,
+                    ));
+                }
+            }
+            Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene)
+        };
+        let (arm, table) = (scene(30, 1.0), scene(120, 1.0));
+        let p = seated(0.0);
+        // A forearm along x over y = 0.25, its underside 1 cm below the top.
+        let r = 0.02;
+        let forearm = Cylinder {
+            joint: 1,
+            a: Point3::new(0.0, 0.25, 0.69 + r),
+            b: Point3::new(0.25, 0.25, 0.69 + r),
+            radius: r,
+        };
+        assert!(arm.touches(&forearm) && table.touches(&forearm));
+        let mut node = h.nodes[0].clone();
+        node.support_gap = 0.06;
+        // The stick is 1 m tall: what holds the arm ends within 0.25 m outwards.
+        node.narrow = Some(0.25);
+        assert!(with(&a, &h, &arm, &p, &node).narrow(&[forearm]));
+        assert!(!with(&a, &h, &table, &p, &node).narrow(&[forearm]));
+        // The same on the right side, mirrored, and without the rule.
+        let mirror = |q: Point3<f64>| Point3::new(q.x, -q.y, q.z);
+        let right = Cylinder {
+            a: mirror(forearm.a),
+            b: mirror(forearm.b),
+            ..forearm
+        };
+        assert!(with(&a, &h, &scene(30, -1.0), &p, &node).narrow(&[right]));
+        assert!(!with(&a, &h, &scene(120, -1.0), &p, &node).narrow(&[right]));
+        node.narrow = None;
+        assert!(with(&a, &h, &table, &p, &node).narrow(&[forearm]));
     }
 
     #[test]

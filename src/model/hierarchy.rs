@@ -230,6 +230,10 @@ pub struct Node {
     /// What the node finds stands at the rear of a seat, not at the head of a bed (`None`:
     /// no such test).
     pub rear: Option<Rear>,
+    /// Fraction of H: what the node's parts rest on ends within this far outwards from
+    /// them, away from the body's midplane, within `support_gap` below (an armrest is a
+    /// rest for one arm, a table top beside the body goes on). `None`: no such test.
+    pub narrow: Option<f64>,
 }
 
 /// A node's `rear` rule: a contact counts only if, from the root joint along the
@@ -435,6 +439,8 @@ struct NodeFile {
     beside: Option<BesideFile>,
     #[serde(default)]
     rear: Option<RearFile>,
+    #[serde(default)]
+    narrow: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -1024,6 +1030,15 @@ fn resolve_node(
             })
         }
     };
+    if let Some(w) = n.narrow {
+        // Beyond a body height the rule could never refuse a contact in a room.
+        if !(w > 0.0 && w <= 1.0) {
+            return Err(src.invalid(
+                &key.key("narrow"),
+                format!("must be over 0 and at most 1 (a fraction of H), not {w}"),
+            ));
+        }
+    }
     if let Some(v) = n.support_share {
         if !(v > 0.0 && v <= 1.0) {
             return Err(src.invalid(
@@ -1200,6 +1215,7 @@ fn resolve_node(
         unseen_reach: n.unseen_reach,
         beside,
         rear,
+        narrow: n.narrow,
     })
 }
 
@@ -1653,6 +1669,16 @@ mod tests {
         names(&e, line, "node.backrest.rear.reach", "at most 1");
         let (e, line) = edited(rule, "rear = { reach = 0.45, gap = -0.1 }");
         names(&e, line, "node.backrest.rear.gap", "under 1 metre");
+    }
+
+    #[test]
+    fn a_bad_narrow_rule_is_named() {
+        let rule = "narrow = 0.25";
+        assert_eq!(BUILTIN_SITTING.matches(rule).count(), 1);
+        let armrest = &load(BUILTIN_SITTING).unwrap().nodes[1];
+        assert_eq!(armrest.narrow, Some(0.25));
+        let (e, line) = edited(rule, "narrow = 0.0");
+        names(&e, line, "node.armrest.narrow", "over 0 and at most 1");
     }
 
     #[test]
