@@ -230,55 +230,13 @@ impl HeightMap {
         };
         let nx = to_usize(((hi.x - lo.x) / cell).floor()) + 1;
         let ny = to_usize(((hi.y - lo.y) / cell).floor()) + 1;
+        let reaches = reaches(cloud, lo, cfg, skip_dense);
         // Every other cell's centre is at least half a cell from the point along x or y:
         // `jx + 0.5 - fx` is at least 0.5 in size (`ix <= fx < ix + 1`, or `fx` beyond the
         // last column, which has no right neighbour) and rounding keeps it so, so a
         // point whose squared reach is below this reaches its own cell only (the same
         // cells as testing each).
         let half2 = (0.5 * cell) * (0.5 * cell);
-        // The reach a spacing `s` gives (before the cloud's spacing is taken as its
-        // least), and whether it stays in the point's own cell.
-        let reach_of = |s: f64| (cfg.sample_reach * s).min(cfg.max_reach);
-        let dense = |s: f64| {
-            let r = reach_of(s);
-            r * r < half2
-        };
-        // The reach is monotonic in the spacing (`min` of a multiple), so `dense` holds on
-        // a down-set of spacings (those up to some length): a point whose tile's spacing
-        // is dense reaches its own cell only, as the cloud's spacing does when that is
-        // dense too, and marks the tiles one cell round its own (`ceil(reach / cell)`
-        // is 1) when the cloud's spacing gives a positive reach; when the cloud's
-        // spacing is not dense, it is longer than a dense tile's and is the point's
-        // spacing. So the dense tiles are left out of `tiles` (looked up, they give the
-        // cloud's spacing) and every point reaches the same cells and marks the same
-        // tiles, unless the cloud's spacing is dense without a positive reach (every
-        // point doubled): then the tiles are measured again, exactly.
-        let measure = |skip: bool| {
-            if skip {
-                TileSpacing::above(cloud, lo, cfg.spacing_tile, cfg.spacing_queries, &dense)
-            } else {
-                TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries)
-            }
-        };
-        // Independent measures of the same points, side by side.
-        let (global, tiles) = rayon::join(|| point_spacing(cloud), || measure(skip_dense));
-        let no_reach = |g: f64| dense(g) && to_isize((reach_of(g) / cell).ceil()) != 1;
-        let tiles = if skip_dense && global.is_some_and(no_reach) {
-            measure(false)
-        } else {
-            tiles
-        };
-        // How far each point reaches: its tile's spacing, at least the cloud's (looked up
-        // once, for the passes below).
-        let reaches: Vec<f64> = tiles
-            .at_each(&cloud.points)
-            .map(|t| {
-                global.map_or(0.0, |g| {
-                    let s = t.map_or(g, |t| t.max(g));
-                    (cfg.sample_reach * s).min(cfg.max_reach)
-                })
-            })
-            .collect();
         let widest = reaches.iter().copied().fold(0.0, f64::max);
         // Cell offsets a point may reach beyond its own cell (none for dense clouds).
         let r = to_isize((widest / cell).ceil());
@@ -484,6 +442,69 @@ impl HeightMap {
         }
         out
     }
+}
+
+/// How far each point of `cloud` reaches (metres, the [`HeightMap::from_cloud`] rule:
+/// `cfg.sample_reach` times its tile's spacing, at least the cloud's, at most
+/// `cfg.max_reach`; 0 without a spacing), tiles from the corner `lo`; with `skip_dense`
+/// the tiles whose spacing gives a reach under half a cell are not measured exactly and
+/// their points get the reach of the cloud's spacing, which reaches the same cells and
+/// marks the same tiles (see below).
+fn reaches(
+    cloud: &PointCloud,
+    lo: Point3<f64>,
+    cfg: &HeightMapConfig,
+    skip_dense: bool,
+) -> Vec<f64> {
+    let cell = cfg.cell;
+    // Every other cell's centre is at least half a cell from the point along x or y:
+    // `jx + 0.5 - fx` is at least 0.5 in size (`ix <= fx < ix + 1`, or `fx` beyond the
+    // last column, which has no right neighbour) and rounding keeps it so, so a
+    // point whose squared reach is below this reaches its own cell only (the same
+    // cells as testing each).
+    let half2 = (0.5 * cell) * (0.5 * cell);
+    // The reach a spacing `s` gives (before the cloud's spacing is taken as its
+    // least), and whether it stays in the point's own cell.
+    let reach_of = |s: f64| (cfg.sample_reach * s).min(cfg.max_reach);
+    let dense = |s: f64| {
+        let r = reach_of(s);
+        r * r < half2
+    };
+    // The reach is monotonic in the spacing (`min` of a multiple), so `dense` holds on
+    // a down-set of spacings (those up to some length): a point whose tile's spacing
+    // is dense reaches its own cell only, as the cloud's spacing does when that is
+    // dense too, and marks the tiles one cell round its own (`ceil(reach / cell)`
+    // is 1) when the cloud's spacing gives a positive reach; when the cloud's
+    // spacing is not dense, it is longer than a dense tile's and is the point's
+    // spacing. So the dense tiles are left out of `tiles` (looked up, they give the
+    // cloud's spacing) and every point reaches the same cells and marks the same
+    // tiles, unless the cloud's spacing is dense without a positive reach (every
+    // point doubled): then the tiles are measured again, exactly.
+    let measure = |skip: bool| {
+        if skip {
+            TileSpacing::above(cloud, lo, cfg.spacing_tile, cfg.spacing_queries, &dense)
+        } else {
+            TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries)
+        }
+    };
+    // Independent measures of the same points, side by side.
+    let (global, tiles) = rayon::join(|| point_spacing(cloud), || measure(skip_dense));
+    let no_reach = |g: f64| dense(g) && to_isize((reach_of(g) / cell).ceil()) != 1;
+    let tiles = if skip_dense && global.is_some_and(no_reach) {
+        measure(false)
+    } else {
+        tiles
+    };
+    // Looked up once per point, for the passes of the map.
+    tiles
+        .at_each(&cloud.points)
+        .map(|t| {
+            global.map_or(0.0, |g| {
+                let s = t.map_or(g, |t| t.max(g));
+                (cfg.sample_reach * s).min(cfg.max_reach)
+            })
+        })
+        .collect()
 }
 
 /// The top of the lowest stack of the sorted heights `column` standing on the floor
