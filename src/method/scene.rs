@@ -1453,29 +1453,36 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
     v[0] = first;
     z[0] = f32::NEG_INFINITY;
     z[1] = f32::INFINITY;
+    // A parabola's terms in the intersection: `f[p] + p^2` and `2 p`, as f32.
+    let terms = |p: usize| (f[p] + (p * p) as f32, 2.0 * p as f32);
+    // The terms of `v[k]`, the top of the envelope, kept as it changes: the same values
+    // as computing them at each comparison.
+    let (mut hp, mut tp) = terms(first);
     for (q, &fq) in f.iter().enumerate().skip(first + 1) {
         if fq == FAR {
             continue;
         }
-        // The new parabola's terms, as the intersection below computes them.
+        // The new parabola's terms (`terms(q)`).
         let (hq, q2) = (fq + (q * q) as f32, 2.0 * q as f32);
         loop {
-            let p = v[k];
-            let s = (hq - (f[p] + (p * p) as f32)) / (q2 - 2.0 * p as f32);
+            let s = (hq - hp) / (q2 - tp);
             if s <= z[k] {
                 if k == 0 {
                     // The new parabola dominates from -inf: replace.
                     v[0] = q;
                     z[0] = f32::NEG_INFINITY;
                     z[1] = f32::INFINITY;
+                    (hp, tp) = (hq, q2);
                     break;
                 }
                 k -= 1;
+                (hp, tp) = terms(v[k]);
             } else {
                 k += 1;
                 v[k] = q;
                 z[k] = s;
                 z[k + 1] = f32::INFINITY;
+                (hp, tp) = (hq, q2);
                 break;
             }
         }
