@@ -1488,14 +1488,18 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
         }
     }
     k = 0;
+    // `v[k]` as f32 and its `f`, kept as `k` changes.
+    let (mut pf, mut fp) = (v[0] as f32, f[v[0]]);
     for (q, dq) in d.iter_mut().enumerate().take(n - from.min(n)) {
-        let q = q + from;
-        while z[k + 1] < q as f32 {
-            k += 1;
+        let qf = (q + from) as f32;
+        if z[k + 1] < qf {
+            while z[k + 1] < qf {
+                k += 1;
+            }
+            (pf, fp) = (v[k] as f32, f[v[k]]);
         }
-        let p = v[k];
-        let diff = q as f32 - p as f32;
-        *dq = diff * diff + f[p];
+        let diff = qf - pf;
+        *dq = diff * diff + fp;
     }
 }
 
