@@ -23,6 +23,10 @@ const MAX_SCANNED: usize = 5000;
 /// Most points (evenly chosen) whose coordinates are sorted for the robust extent: enough
 /// for the 1 % and 99 % quantiles to be within a few per cent of the cloud's.
 const EXTENT_SAMPLE: usize = 10_000;
+/// Positions of a tile's point list round a query that [`TileSpacing::above`] searches
+/// first for the `K` neighbours that make its spacing small: a depth image lists a
+/// point's row neighbours next to it, and a scan's points come in runs along a surface.
+const NEARBY: usize = 8;
 /// A [`TileSpacing`] tile with fewer points than this also searches the tiles round it:
 /// 64 samples of a surface crossing a tile leave few queries near its border.
 const FEW_IN_TILE: usize = 64;
@@ -196,6 +200,36 @@ impl TileSpacing {
     /// Measures the spacing of every tile of `cloud` (world frame, metres) in cubes of
     /// `tile` metres from the corner `lo`.
     pub fn new(cloud: &PointCloud, lo: Point3<f64>, tile: f64, queries: usize) -> TileSpacing {
+        TileSpacing::measure(cloud, lo, tile, queries, None)
+    }
+
+    /// [`TileSpacing::new`] without the tiles whose spacing is `small`: [`TileSpacing::at`]
+    /// answers `None` for them, as for a tile of too few points, and every other tile has
+    /// the value [`TileSpacing::new`] gives it, bit for bit. `small` must hold on a
+    /// down-set (if it holds for a length, it holds for every shorter one, down to 0):
+    /// then a tile's median is small when more than half of its queries' `K`-th
+    /// distances are, and a query's is small as soon as `K` of its neighbours are found
+    /// at a small distance, so a densely sampled tile is decided from a few neighbours
+    /// of each query (visited outwards from the query in the cloud's order, where a depth
+    /// image's row neighbours are) instead of a scan of every point of the tile.
+    pub fn above(
+        cloud: &PointCloud,
+        lo: Point3<f64>,
+        tile: f64,
+        queries: usize,
+        small: &(dyn Fn(f64) -> bool + Sync),
+    ) -> TileSpacing {
+        TileSpacing::measure(cloud, lo, tile, queries, Some(small))
+    }
+
+    /// [`TileSpacing::new`] (`small` of `None`) or [`TileSpacing::above`].
+    fn measure(
+        cloud: &PointCloud,
+        lo: Point3<f64>,
+        tile: f64,
+        queries: usize,
+        small: Option<&(dyn Fn(f64) -> bool + Sync)>,
+    ) -> TileSpacing {
         let mut out = TileSpacing {
             lo,
             tile,
@@ -226,35 +260,44 @@ impl TileSpacing {
         // parallel and the values inserted in the map's order, as one by one.
         let tiles: Vec<(&[i64; 3], &Vec<usize>)> =
             members.iter().filter(|(_, m)| m.len() > K).collect();
-        let values: Vec<f64> = tiles
+        let values: Vec<Option<f64>> = tiles
             .par_iter()
-            .map_init(Vec::new, |near: &mut Vec<Point3<f64>>, &(k, m)| {
-                near.clear();
-                // Where the tile's own points start in `near`.
+            .map_init(Vec::new, |ids: &mut Vec<usize>, &(k, m)| {
+                // The indices of the points searched: the tile's own, or those of the 27
+                // tiles round it, the tile's own from `own` on.
+                ids.clear();
                 let mut own = 0;
-                if m.len() < FEW_IN_TILE {
+                let near: &[usize] = if m.len() < FEW_IN_TILE {
                     for o in neighbourhood() {
                         if let Some(n) = members.get(&[k[0] + o[0], k[1] + o[1], k[2] + o[2]]) {
                             if o == [0, 0, 0] {
-                                own = near.len();
+                                own = ids.len();
                             }
-                            near.extend(n.iter().map(|&j| cloud.points[j]));
+                            ids.extend_from_slice(n);
                         }
                     }
+                    ids
                 } else {
-                    near.extend(m.iter().map(|&j| cloud.points[j]));
-                }
+                    m
+                };
                 let step = m.len().div_ceil(queries.max(1));
-                let mut kth: Vec<f64> = (0..m.len())
-                    .step_by(step)
-                    .map(|q| kth_nearest_of(near, own + q))
-                    .collect();
-                kth.sort_by(f64::total_cmp);
-                kth[(kth.len() - 1) / 2]
+                let at = (0..m.len()).step_by(step).map(|q| own + q);
+                match small {
+                    None => {
+                        let near: Vec<Point3<f64>> =
+                            near.iter().map(|&j| cloud.points[j]).collect();
+                        let mut kth: Vec<f64> = at.map(|q| kth_nearest_of(&near, q)).collect();
+                        kth.sort_by(f64::total_cmp);
+                        Some(kth[(kth.len() - 1) / 2])
+                    }
+                    Some(small) => median_above(&cloud.points, near, at, small),
+                }
             })
             .collect();
         for (&(k, _), v) in tiles.iter().zip(values) {
-            out.values.insert(*k, v);
+            if let Some(v) = v {
+                out.values.insert(*k, v);
+            }
         }
         out
     }
@@ -298,6 +341,20 @@ impl TileSpacing {
     }
 }
 
+/// Keeps `s` among the [`K`] smallest squared lengths so far, `best` (ascending), when it
+/// is smaller than the largest of them; a value equal to it does not enter.
+#[inline]
+fn keep_smallest(best: &mut [f64; K], s: f64) {
+    if s < best[K - 1] {
+        let mut i = K - 1;
+        while i > 0 && best[i - 1] > s {
+            best[i] = best[i - 1];
+            i -= 1;
+        }
+        best[i] = s;
+    }
+}
+
 /// The [`K`]-th smallest length of `offsets` (at least [`K`] of them; infinity with
 /// fewer): the `K` smallest squared lengths are kept in order as they come, and the root
 /// taken of the last. The same value as sorting the lengths (`norm`, the root of
@@ -308,14 +365,7 @@ fn kth_nearest(offsets: impl Iterator<Item = nalgebra::Vector3<f64>>) -> f64 {
     let mut best = [f64::INFINITY; K];
     for v in offsets {
         let s = v.norm_squared();
-        if s < best[K - 1] {
-            let mut i = K - 1;
-            while i > 0 && best[i - 1] > s {
-                best[i] = best[i - 1];
-                i -= 1;
-            }
-            best[i] = s;
-        }
+        keep_smallest(&mut best, s);
     }
     best[K - 1].sqrt()
 }
@@ -338,16 +388,82 @@ fn kth_nearest_of(points: &[Point3<f64>], at: usize) -> f64 {
             continue;
         }
         let s = (p - qp).norm_squared();
-        if s < best[K - 1] {
-            let mut i = K - 1;
-            while i > 0 && best[i - 1] > s {
-                best[i] = best[i - 1];
-                i -= 1;
-            }
-            best[i] = s;
-        }
+        keep_smallest(&mut best, s);
     }
     best[K - 1].sqrt()
+}
+
+/// Among the points `near` (indices into `points`), the lower median of the
+/// [`kth_nearest_of`] distances of the queries `at` (positions in `near`), or `None`
+/// when it is `small` (a predicate true on a down-set): the same median as sorting them
+/// all, bit for bit. Every small distance is shorter than every other, so the median is
+/// small when more than half of the queries are, and is otherwise the one at its rank
+/// among the others once the small ones are counted; a query found small among its
+/// neighbours in `near` ([`small_nearby`]) needs no exact distance, the others are
+/// measured by [`kth_nearest_of`] over a copy of the points.
+fn median_above(
+    points: &[Point3<f64>],
+    near: &[usize],
+    at: impl ExactSizeIterator<Item = usize>,
+    small: &dyn Fn(f64) -> bool,
+) -> Option<f64> {
+    let rank = (at.len().max(1) - 1) / 2;
+    let mut below = 0usize;
+    let mut rest: Vec<f64> = Vec::new();
+    // The points of `near`, copied when a query first needs the full search.
+    let mut copy: Vec<Point3<f64>> = Vec::new();
+    for q in at {
+        // After a query that is not small, the tile is taken for a sparse one and the
+        // search nearby is left out: it would seldom find a small query there.
+        let try_nearby = rest.is_empty();
+        let exact = if try_nearby && small_nearby(points, near, q, small) {
+            None
+        } else {
+            if copy.is_empty() {
+                copy.extend(near.iter().filter_map(|&j| points.get(j)));
+            }
+            let d = kth_nearest_of(&copy, q);
+            (!small(d)).then_some(d)
+        };
+        match exact {
+            None => {
+                below += 1;
+                if below > rank {
+                    return None;
+                }
+            }
+            Some(d) => rest.push(d),
+        }
+    }
+    rest.sort_by(f64::total_cmp);
+    rest.get(rank - below).copied()
+}
+
+/// Whether the [`kth_nearest_of`] distance of the point at position `at` of `near`
+/// (indices into `points`) is `small` (a predicate true on a down-set), as found among
+/// the [`NEARBY`] positions of `near` round it: `true` when it is small, `false` when
+/// it is not or was not found so. The `K`-th smallest distance among some of the points
+/// is at least that among all, so when it is small, the one among all is too; the
+/// positions nearest `at` are where a depth image's row neighbours are.
+fn small_nearby(
+    points: &[Point3<f64>],
+    near: &[usize],
+    at: usize,
+    small: &dyn Fn(f64) -> bool,
+) -> bool {
+    let Some(&qp) = near.get(at).and_then(|&i| points.get(i)) else {
+        return false;
+    };
+    let mut best = [f64::INFINITY; K];
+    let from = at.saturating_sub(NEARBY / 2);
+    let to = (from + NEARBY + 1).min(near.len());
+    for (j, &i) in near[from..to].iter().enumerate() {
+        let Some(p) = points.get(i) else { continue };
+        if from + j != at {
+            keep_smallest(&mut best, (p - qp).norm_squared());
+        }
+    }
+    small(best[K - 1].sqrt())
 }
 
 fn neighbourhood() -> impl Iterator<Item = [i64; 3]> {
@@ -457,24 +573,39 @@ mod tests {
         for round in 0..2000 {
             let n = rng.random_range(K..60);
             let lattice = round % 2 == 0;
-            let offsets: Vec<nalgebra::Vector3<f64>> = (0..n)
-                .map(|_| {
-                    let mut c = || {
-                        let v: f64 = rng.random_range(-0.3..0.3);
-                        if lattice {
-                            (v * 20.0).round() * 0.05
-                        } else {
-                            v
-                        }
-                    };
-                    nalgebra::Vector3::new(c(), c(), c())
-                })
-                .collect();
+            let offsets: Vec<nalgebra::Vector3<f64>> =
+                random_points(&mut rng, n, lattice.then_some(20.0))
+                    .into_iter()
+                    .map(|p| p.coords)
+                    .collect();
             let mut d: Vec<f64> = offsets.iter().map(|v| v.norm()).collect();
             let want = *d.select_nth_unstable_by(K - 1, f64::total_cmp).1;
             let got = kth_nearest(offsets.into_iter());
             assert_eq!(got.to_bits(), want.to_bits(), "round {round}");
         }
+    }
+
+    /// `n` seeded points in a 0.6 m cube centred on the origin, continuous or, with
+    /// `lattice`, rounded to a lattice of that many steps per metre (ties, repeated
+    /// points, equal x).
+    fn random_points(
+        rng: &mut rand_chacha::ChaCha8Rng,
+        n: usize,
+        lattice: Option<f64>,
+    ) -> Vec<Point3<f64>> {
+        use rand::RngExt;
+        (0..n)
+            .map(|_| {
+                let mut c = || {
+                    let v: f64 = rng.random_range(-0.3..0.3);
+                    match lattice {
+                        Some(per) => (v * per).round() * (1.0 / per),
+                        None => v,
+                    }
+                };
+                Point3::new(c(), c(), c())
+            })
+            .collect()
     }
 
     /// `kth_nearest_of` against `kth_nearest` of every other point's offset, bit for bit,
@@ -487,19 +618,7 @@ mod tests {
         for round in 0..3000 {
             let n = rng.random_range(1..80);
             let lattice = round % 2 == 0;
-            let points: Vec<Point3<f64>> = (0..n)
-                .map(|_| {
-                    let mut c = || {
-                        let v: f64 = rng.random_range(-0.3..0.3);
-                        if lattice {
-                            (v * 10.0).round() * 0.1
-                        } else {
-                            v
-                        }
-                    };
-                    Point3::new(c(), c(), c())
-                })
-                .collect();
+            let points: Vec<Point3<f64>> = random_points(&mut rng, n, lattice.then_some(10.0));
             for at in 0..n {
                 let want = kth_nearest((0..n).filter(|&j| j != at).map(|j| points[j] - points[at]));
                 assert_eq!(
@@ -510,5 +629,113 @@ mod tests {
             }
         }
         assert_eq!(kth_nearest_of(&[], 0), f64::INFINITY);
+    }
+
+    /// `small_nearby` (small only when the full search says so) and `median_above`
+    /// against `kth_nearest_of` and the sorted median, bit for bit, on seeded sets (continuous, on a lattice with ties and
+    /// repeated points, in a shuffled and in a sorted order, with a subset as `near`)
+    /// and thresholds below, inside and above their distances (`<` and `<=`).
+    #[test]
+    fn searches_that_stop_at_small_distances_agree_with_the_full_ones() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(17);
+        let (mut small_seen, mut exact_seen, mut nearby_seen) = (0, 0, 0);
+        for round in 0..600 {
+            let n = rng.random_range(1..90);
+            let lattice = round % 3 == 0;
+            let mut points: Vec<Point3<f64>> = random_points(&mut rng, n, lattice.then_some(10.0));
+            if round % 2 == 0 {
+                points.sort_by(|a, b| a.x.total_cmp(&b.x));
+            }
+            let near: Vec<usize> = (0..n).filter(|j| round % 5 != 0 || j % 4 != 1).collect();
+            let pts: Vec<Point3<f64>> = near.iter().map(|&j| points[j]).collect();
+            let thr = [0.0, 0.02, 0.05, 0.1, 0.2, 1.0][round % 6];
+            let lt = move |d: f64| d < thr;
+            let le = move |d: f64| d <= thr;
+            for small in [&lt as &dyn Fn(f64) -> bool, &le] {
+                let mut all = Vec::new();
+                for at in 0..near.len() {
+                    let want = kth_nearest_of(&pts, at);
+                    if small_nearby(&points, &near, at, small) {
+                        assert!(small(want), "{round} {at}");
+                        nearby_seen += 1;
+                    }
+                    if small(want) {
+                        small_seen += 1;
+                    } else {
+                        exact_seen += 1;
+                    }
+                    all.push(want);
+                }
+                let step = rng.random_range(1..4);
+                let at = (0..near.len()).step_by(step);
+                let mut kth: Vec<f64> = at.clone().map(|q| all[q]).collect();
+                if kth.is_empty() {
+                    continue;
+                }
+                kth.sort_by(f64::total_cmp);
+                let want = kth[(kth.len() - 1) / 2];
+                let got = median_above(&points, &near, at, small);
+                assert_eq!(
+                    got.map(f64::to_bits),
+                    (!small(want)).then_some(want.to_bits()),
+                    "{round}"
+                );
+            }
+        }
+        assert!(
+            small_seen > 1000 && exact_seen > 1000 && nearby_seen > 1000,
+            "{small_seen} {exact_seen} {nearby_seen}"
+        );
+    }
+
+    /// `TileSpacing::above` holds exactly the tiles of `TileSpacing::new` whose spacing is
+    /// not small, with the same values, bit for bit: a depth-image-like cloud (rows of a
+    /// dense floor and a sparse seat), a shuffled one, and few points per tile.
+    #[test]
+    fn tiles_above_a_threshold_keep_their_values() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(19);
+        let mut left_out = 0;
+        for round in 0..8 {
+            let mut pts = grid([0.004, 0.01][round % 2], 120).points;
+            for p in &mut pts {
+                p.z = 0.0;
+            }
+            pts.extend(grid(0.05, 12).points);
+            pts.extend(
+                grid(0.03, 5)
+                    .points
+                    .iter()
+                    .map(|p| p + nalgebra::Vector3::new(2.0, 0.0, 0.0)),
+            );
+            for p in &mut pts {
+                let j = rng.random_range(-0.001..0.001);
+                *p += nalgebra::Vector3::new(j, -j, 0.5 * j);
+            }
+            if round >= 4 {
+                for i in (1..pts.len()).rev() {
+                    pts.swap(i, rng.random_range(0..=i));
+                }
+            }
+            let c = PointCloud::new(pts);
+            let lo = Point3::new(-0.1, -0.1, -0.1);
+            let all = TileSpacing::new(&c, lo, 0.25, 16);
+            for thr in [0.0, 0.008, 0.012, 0.03, 0.06] {
+                let small = move |d: f64| d < thr;
+                let above = TileSpacing::above(&c, lo, 0.25, 16, &small);
+                for (k, &v) in &all.values {
+                    let want = (!small(v)).then_some(v.to_bits());
+                    assert_eq!(
+                        above.values.get(k).map(|v| v.to_bits()),
+                        want,
+                        "{round} {thr}"
+                    );
+                    left_out += usize::from(want.is_none());
+                }
+                assert!(above.values.keys().all(|k| all.values.contains_key(k)));
+            }
+        }
+        assert!(left_out > 100, "{left_out}");
     }
 }

@@ -218,28 +218,25 @@ impl HeightMap {
     /// that far above the floor sees only a roof and is invalid. Each point counts in every
     /// cell whose centre is within `cfg.sample_reach` point spacings of it. An empty cloud gives an empty map.
     pub fn from_cloud(cloud: &PointCloud, cfg: &HeightMapConfig) -> HeightMap {
+        HeightMap::build(cloud, cfg, true)
+    }
+
+    /// [`HeightMap::from_cloud`]; with `skip_dense` the tiles whose spacing gives a reach
+    /// under half a cell are not measured exactly (the same map, bit for bit: see below).
+    fn build(cloud: &PointCloud, cfg: &HeightMapConfig, skip_dense: bool) -> HeightMap {
         let cell = cfg.cell;
         let Some((lo, hi)) = cloud.bounds() else {
             return HeightMap::empty(0.0, 0.0, cell, 0, 0);
         };
         let nx = to_usize(((hi.x - lo.x) / cell).floor()) + 1;
         let ny = to_usize(((hi.y - lo.y) / cell).floor()) + 1;
-        // Independent measures of the same points, side by side.
-        let (global, tiles) = rayon::join(
-            || point_spacing(cloud),
-            || TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries),
-        );
-        // How far each point reaches: its tile's spacing, at least the cloud's (looked up
-        // once, for the passes below).
-        let reaches: Vec<f64> = tiles
-            .at_each(&cloud.points)
-            .map(|t| {
-                global.map_or(0.0, |g| {
-                    let s = t.map_or(g, |t| t.max(g));
-                    (cfg.sample_reach * s).min(cfg.max_reach)
-                })
-            })
-            .collect();
+        let reaches = reaches(cloud, lo, cfg, skip_dense);
+        // Every other cell's centre is at least half a cell from the point along x or y:
+        // `jx + 0.5 - fx` is at least 0.5 in size (`ix <= fx < ix + 1`, or `fx` beyond the
+        // last column, which has no right neighbour) and rounding keeps it so, so a
+        // point whose squared reach is below this reaches its own cell only (the same
+        // cells as testing each).
+        let half2 = (0.5 * cell) * (0.5 * cell);
         let widest = reaches.iter().copied().fold(0.0, f64::max);
         // Cell offsets a point may reach beyond its own cell (none for dense clouds).
         let r = to_isize((widest / cell).ceil());
@@ -248,12 +245,6 @@ impl HeightMap {
             let (fx, fy) = ((p.x - lo.x) / cell, (p.y - lo.y) / cell);
             (fx, fy, to_usize(fx).min(nx - 1), to_usize(fy).min(ny - 1))
         };
-        // Every other cell's centre is at least half a cell from the point along x or y:
-        // `jx + 0.5 - fx` is at least 0.5 in size (`ix <= fx < ix + 1`, or `fx` beyond the
-        // last column, which has no right neighbour) and rounding keeps it so, so a
-        // point whose squared reach is below this reaches its own cell only (the same
-        // cells as testing each).
-        let half2 = (0.5 * cell) * (0.5 * cell);
         let cells_of = |p: &Point3<f64>, reach: f64, out: &mut Vec<(usize, usize)>| {
             out.clear();
             let (fx, fy, ix, iy) = own(p);
@@ -451,6 +442,69 @@ impl HeightMap {
         }
         out
     }
+}
+
+/// How far each point of `cloud` reaches (metres, the [`HeightMap::from_cloud`] rule:
+/// `cfg.sample_reach` times its tile's spacing, at least the cloud's, at most
+/// `cfg.max_reach`; 0 without a spacing), tiles from the corner `lo`; with `skip_dense`
+/// the tiles whose spacing gives a reach under half a cell are not measured exactly and
+/// their points get the reach of the cloud's spacing, which reaches the same cells and
+/// marks the same tiles (see below).
+fn reaches(
+    cloud: &PointCloud,
+    lo: Point3<f64>,
+    cfg: &HeightMapConfig,
+    skip_dense: bool,
+) -> Vec<f64> {
+    let cell = cfg.cell;
+    // Every other cell's centre is at least half a cell from the point along x or y:
+    // `jx + 0.5 - fx` is at least 0.5 in size (`ix <= fx < ix + 1`, or `fx` beyond the
+    // last column, which has no right neighbour) and rounding keeps it so, so a
+    // point whose squared reach is below this reaches its own cell only (the same
+    // cells as testing each).
+    let half2 = (0.5 * cell) * (0.5 * cell);
+    // The reach a spacing `s` gives (before the cloud's spacing is taken as its
+    // least), and whether it stays in the point's own cell.
+    let reach_of = |s: f64| (cfg.sample_reach * s).min(cfg.max_reach);
+    let dense = |s: f64| {
+        let r = reach_of(s);
+        r * r < half2
+    };
+    // The reach is monotonic in the spacing (`min` of a multiple), so `dense` holds on
+    // a down-set of spacings (those up to some length): a point whose tile's spacing
+    // is dense reaches its own cell only, as the cloud's spacing does when that is
+    // dense too, and marks the tiles one cell round its own (`ceil(reach / cell)`
+    // is 1) when the cloud's spacing gives a positive reach; when the cloud's
+    // spacing is not dense, it is longer than a dense tile's and is the point's
+    // spacing. So the dense tiles are left out of `tiles` (looked up, they give the
+    // cloud's spacing) and every point reaches the same cells and marks the same
+    // tiles, unless the cloud's spacing is dense without a positive reach (every
+    // point doubled): then the tiles are measured again, exactly.
+    let measure = |skip: bool| {
+        if skip {
+            TileSpacing::above(cloud, lo, cfg.spacing_tile, cfg.spacing_queries, &dense)
+        } else {
+            TileSpacing::new(cloud, lo, cfg.spacing_tile, cfg.spacing_queries)
+        }
+    };
+    // Independent measures of the same points, side by side.
+    let (global, tiles) = rayon::join(|| point_spacing(cloud), || measure(skip_dense));
+    let no_reach = |g: f64| dense(g) && to_isize((reach_of(g) / cell).ceil()) != 1;
+    let tiles = if skip_dense && global.is_some_and(no_reach) {
+        measure(false)
+    } else {
+        tiles
+    };
+    // Looked up once per point, for the passes of the map.
+    tiles
+        .at_each(&cloud.points)
+        .map(|t| {
+            global.map_or(0.0, |g| {
+                let s = t.map_or(g, |t| t.max(g));
+                (cfg.sample_reach * s).min(cfg.max_reach)
+            })
+        })
+        .collect()
 }
 
 /// The top of the lowest stack of the sorted heights `column` standing on the floor
@@ -780,5 +834,70 @@ mod tests {
             );
         }
         assert!(seen > 300 && sparse > 3, "{seen} {sparse}");
+    }
+
+    /// The map built with the dense tiles' spacings left out ([`HeightMap::from_cloud`])
+    /// against the map built from every tile's exact spacing: the same grid, the same
+    /// stored tiles and the same heights, bit for bit. Seeded clouds mix dense patches
+    /// (reach under half a cell), sparse ones and, in some rounds, a doubled dense floor
+    /// that makes the cloud's spacing 0 (the tiles measured again); the reach settings
+    /// vary round the thresholds.
+    #[test]
+    fn skipping_dense_tiles_builds_the_same_map() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(23);
+        let base = HeightMapConfig::default();
+        let configs = [
+            base,
+            HeightMapConfig {
+                sample_reach: 3.0,
+                ..base
+            },
+            HeightMapConfig {
+                sample_reach: 0.0,
+                ..base
+            },
+            HeightMapConfig {
+                max_reach: 0.02,
+                ..base
+            },
+            HeightMapConfig {
+                sample_reach: -1.0,
+                ..base
+            },
+        ];
+        for round in 0..16 {
+            let mut pts = Vec::new();
+            for _ in 0..rng.random_range(1..5) {
+                let (x0, y0) = (rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0));
+                let step = [0.004, 0.01, 0.02, 0.04, 0.07][rng.random_range(0..5)];
+                let z = [0.0, 0.45, 0.9][rng.random_range(0..3)];
+                for p in square(x0, y0, rng.random_range(0.1..0.5), step, z) {
+                    let jitter = rng.random_range(-0.001..0.001);
+                    pts.push(Point3::new(p.x + jitter, p.y - jitter, p.z + jitter.abs()));
+                }
+            }
+            if round % 4 == 0 {
+                // Each point and four copies: the fourth nearest neighbour is 0 away.
+                let floor = square(3.0, 3.0, 1.0, 0.005, 0.0);
+                for _ in 0..5 {
+                    pts.extend(&floor);
+                }
+            }
+            let cloud = PointCloud::new(pts);
+            for cfg in &configs {
+                let fast = HeightMap::build(&cloud, cfg, true);
+                let exact = HeightMap::build(&cloud, cfg, false);
+                assert_eq!(
+                    (fast.x0, fast.y0, fast.nx, fast.ny, fast.tiles_x),
+                    (exact.x0, exact.y0, exact.nx, exact.ny, exact.tiles_x)
+                );
+                assert_eq!(fast.tiles, exact.tiles, "{round} {cfg:?}");
+                let bits = |m: &HeightMap| -> Vec<Option<u64>> {
+                    m.heights.iter().map(|h| h.map(f64::to_bits)).collect()
+                };
+                assert_eq!(bits(&fast), bits(&exact), "{round} {cfg:?}");
+            }
+        }
     }
 }

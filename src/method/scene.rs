@@ -1453,42 +1453,53 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
     v[0] = first;
     z[0] = f32::NEG_INFINITY;
     z[1] = f32::INFINITY;
+    // A parabola's terms in the intersection: `f[p] + p^2` and `2 p`, as f32.
+    let terms = |p: usize| (f[p] + (p * p) as f32, 2.0 * p as f32);
+    // The terms of `v[k]`, the top of the envelope, kept as it changes: the same values
+    // as computing them at each comparison.
+    let (mut hp, mut tp) = terms(first);
     for (q, &fq) in f.iter().enumerate().skip(first + 1) {
         if fq == FAR {
             continue;
         }
-        // The new parabola's terms, as the intersection below computes them.
+        // The new parabola's terms (`terms(q)`).
         let (hq, q2) = (fq + (q * q) as f32, 2.0 * q as f32);
         loop {
-            let p = v[k];
-            let s = (hq - (f[p] + (p * p) as f32)) / (q2 - 2.0 * p as f32);
+            let s = (hq - hp) / (q2 - tp);
             if s <= z[k] {
                 if k == 0 {
                     // The new parabola dominates from -inf: replace.
                     v[0] = q;
                     z[0] = f32::NEG_INFINITY;
                     z[1] = f32::INFINITY;
+                    (hp, tp) = (hq, q2);
                     break;
                 }
                 k -= 1;
+                (hp, tp) = terms(v[k]);
             } else {
                 k += 1;
                 v[k] = q;
                 z[k] = s;
                 z[k + 1] = f32::INFINITY;
+                (hp, tp) = (hq, q2);
                 break;
             }
         }
     }
     k = 0;
+    // `v[k]` as f32 and its `f`, kept as `k` changes.
+    let (mut pf, mut fp) = (v[0] as f32, f[v[0]]);
     for (q, dq) in d.iter_mut().enumerate().take(n - from.min(n)) {
-        let q = q + from;
-        while z[k + 1] < q as f32 {
-            k += 1;
+        let qf = (q + from) as f32;
+        if z[k + 1] < qf {
+            while z[k + 1] < qf {
+                k += 1;
+            }
+            (pf, fp) = (v[k] as f32, f[v[k]]);
         }
-        let p = v[k];
-        let diff = q as f32 - p as f32;
-        *dq = diff * diff + f[p];
+        let diff = qf - pf;
+        *dq = diff * diff + fp;
     }
 }
 

@@ -189,13 +189,24 @@ impl CellIndex {
         let mut first: Vec<u32> = Vec::new();
         let mut count: Vec<u32> = Vec::new();
         let mut cell_of: Vec<u32> = vec![NO_CELL; cloud.len()];
+        // The last cell looked up and its id: a run of points in one cell (as a depth
+        // image's rows give) looks it up once.
+        let mut last: Option<((i64, i64, i64), u32)> = None;
         for (i, p) in cloud.points.iter().enumerate() {
             if p.z >= floor_height {
-                let c = *ids.entry(key(p)).or_insert_with(|| {
-                    first.push(index32(i));
-                    count.push(0);
-                    index32(first.len() - 1)
-                });
+                let k = key(p);
+                let c = match last {
+                    Some((lk, c)) if lk == k => c,
+                    _ => {
+                        let c = *ids.entry(k).or_insert_with(|| {
+                            first.push(index32(i));
+                            count.push(0);
+                            index32(first.len() - 1)
+                        });
+                        last = Some((k, c));
+                        c
+                    }
+                };
                 count[c as usize] += 1;
                 cell_of[i] = c;
             }
