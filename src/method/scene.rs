@@ -562,6 +562,29 @@ impl Scene {
         }
     }
 
+    /// Whether a surface under a level walk ends: from `from` along the unit direction
+    /// `dir`, in steps of one voxel up to `limit` metres, some probe has no scene within
+    /// `gap` metres below it ([`Self::drop_below`]). Space the scan did not see ends it.
+    /// The `rear` and `narrow` rules of a node walk this way (what a back or an arm stands
+    /// on ends within a seat's depth or an arm's width).
+    pub fn surface_ends(
+        &self,
+        from: &Point3<f64>,
+        dir: &Vector3<f64>,
+        limit: f64,
+        gap: f64,
+    ) -> bool {
+        let step = self.voxel;
+        let mut s = step;
+        while s <= limit {
+            if self.drop_below(&(from + dir * s), gap) > gap {
+                return true;
+            }
+            s += step;
+        }
+        false
+    }
+
     /// Whether the scan saw anything in the column below `p`: some voxel within `reach`
     /// metres of the vertical line from `p` down to the lowest voxel of the scene. The
     /// floor plane the scene assumes does not count: it is not seen. Marches down by the

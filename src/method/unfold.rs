@@ -17,14 +17,9 @@ use crate::model::hierarchy::{Fallback, Hierarchy, Node, Spread};
 use crate::num::to_usize;
 
 /// Least length of the horizontal part of a unit contact normal for the `rear` rule to
-/// read a direction from it: sin 30 degrees, a normal within 60 degrees of vertical (the
-/// top of a seat, a slope) says nothing about what lies in front of the body.
+/// read a direction from it: sin 30 degrees; a normal within 30 degrees of vertical (the
+/// top of a seat, a gentle slope) says nothing about what lies in front of the body.
 const REAR_MIN_HORIZONTAL: f64 = 0.5;
-
-/// How far above a part's underside the `narrow` rule probes what lies below, metres:
-/// half a voxel, so that the surface the part rests on (touching it, or up to a voxel into
-/// it) is below the probe.
-const NARROW_PROBE_LIFT: f64 = 0.01;
 
 /// The outcome of one node.
 #[derive(Debug, Clone, PartialEq)]
@@ -251,26 +246,17 @@ impl NodeContext<'_> {
             return true;
         };
         let reach = rule.reach * self.agent.height;
-        let step = self.scene.voxel_size();
         parts.iter().filter(|c| self.scene.touches(c)).all(|c| {
             let Some(n) = self.scene.contact_normal(c) else {
                 return true;
             };
             let flat = nalgebra::Vector3::new(n.x, n.y, 0.0);
-            // Within 60 degrees of vertical, the normal says little about "in front".
+            // Within 30 degrees of vertical, the normal says little about "in front".
             if flat.norm() < REAR_MIN_HORIZONTAL {
                 return true;
             }
-            let ahead = flat.normalize();
-            let from = self.place.position;
-            let mut s = step;
-            while s <= reach {
-                if self.scene.drop_below(&(from + ahead * s), rule.gap) > rule.gap {
-                    return true;
-                }
-                s += step;
-            }
-            false
+            self.scene
+                .surface_ends(&self.place.position, &flat.normalize(), reach, rule.gap)
         })
     }
 
@@ -286,7 +272,9 @@ impl NodeContext<'_> {
         };
         let width = width * self.agent.height;
         let gap = self.node.support_gap;
-        let step = self.scene.voxel_size();
+        // Half a voxel above the underside: what the part rests on (touching it, or up to
+        // a voxel into it) is below the probe.
+        let lift = self.scene.voxel_size() / 2.0;
         let (s, c) = self.place.yaw.sin_cos();
         let left = nalgebra::Vector3::new(-s, c, 0.0);
         parts.iter().filter(|p| self.scene.touches(p)).all(|p| {
@@ -296,20 +284,8 @@ impl NodeContext<'_> {
             } else {
                 -left
             };
-            // Just above the underside, so that what the part rests on is below the probe.
-            let from = nalgebra::Point3::new(
-                mid.x,
-                mid.y,
-                p.a.z.min(p.b.z) - p.radius + NARROW_PROBE_LIFT,
-            );
-            let mut d = step;
-            while d <= width {
-                if self.scene.drop_below(&(from + out * d), gap) > gap {
-                    return true;
-                }
-                d += step;
-            }
-            false
+            let from = nalgebra::Point3::new(mid.x, mid.y, p.a.z.min(p.b.z) - p.radius + lift);
+            self.scene.surface_ends(&from, &out, width, gap)
         })
     }
 
@@ -505,31 +481,19 @@ impl NodeContext<'_> {
         if self.free_start(hit) {
             blocked = hit.take();
         }
-        if let (Some(t), Some(_)) = (hit, node.release) {
+        // The rules that judge the touching parts, in turn, on the parts at the contact.
+        let judged = node.release.is_some()
+            || node.rear.is_some()
+            || node.narrow.is_some()
+            || node.beside.is_some();
+        if let (Some(t), true) = (hit, judged) {
             let mut parts = Vec::new();
             motion(t, &mut parts);
-            if !self.release(&parts) {
-                blocked = hit.take();
-            }
-        }
-        if let (Some(t), Some(_)) = (hit, node.rear) {
-            let mut parts = Vec::new();
-            motion(t, &mut parts);
-            if !self.rear(&parts) {
-                blocked = hit.take();
-            }
-        }
-        if let (Some(t), Some(_)) = (hit, node.narrow) {
-            let mut parts = Vec::new();
-            motion(t, &mut parts);
-            if !self.narrow(&parts) {
-                blocked = hit.take();
-            }
-        }
-        if let (Some(t), Some(_)) = (hit, node.beside) {
-            let mut parts = Vec::new();
-            motion(t, &mut parts);
-            if !self.beside(&p, &parts) {
+            if !(self.release(&parts)
+                && self.rear(&parts)
+                && self.narrow(&parts)
+                && self.beside(&p, &parts))
+            {
                 blocked = hit.take();
             }
         }

@@ -1013,32 +1013,17 @@ fn resolve_node(
     let rear = match &n.rear {
         None => None,
         Some(r) => {
-            // Beyond a body height the rule could never refuse a contact in a room.
-            if !(r.reach > 0.0 && r.reach <= 1.0) {
-                return Err(src.invalid(
-                    &key.key("rear").key("reach"),
-                    format!(
-                        "must be over 0 and at most 1 (a fraction of H), not {}",
-                        r.reach
-                    ),
-                ));
-            }
             // A metre below the pelvis is the floor under any seat.
             Some(Rear {
-                reach: r.reach,
+                reach: fraction_of_h(src, &key.key("rear").key("reach"), r.reach)?,
                 gap: gap_under_a_metre(src, &key.key("rear").key("gap"), r.gap)?,
             })
         }
     };
-    if let Some(w) = n.narrow {
-        // Beyond a body height the rule could never refuse a contact in a room.
-        if !(w > 0.0 && w <= 1.0) {
-            return Err(src.invalid(
-                &key.key("narrow"),
-                format!("must be over 0 and at most 1 (a fraction of H), not {w}"),
-            ));
-        }
-    }
+    let narrow = n
+        .narrow
+        .map(|w| fraction_of_h(src, &key.key("narrow"), w))
+        .transpose()?;
     if let Some(v) = n.support_share {
         if !(v > 0.0 && v <= 1.0) {
             return Err(src.invalid(
@@ -1215,8 +1200,21 @@ fn resolve_node(
         unseen_reach: n.unseen_reach,
         beside,
         rear,
-        narrow: n.narrow,
+        narrow,
     })
+}
+
+/// A node rule's reach (`rear`, `narrow`), a fraction of H: over 0 and at most 1 (beyond a
+/// body height the rule could never refuse a contact in a room), else an error at `key`.
+fn fraction_of_h(src: Source, key: &Key, v: f64) -> Result<f64, ModelError> {
+    if v > 0.0 && v <= 1.0 {
+        Ok(v)
+    } else {
+        Err(src.invalid(
+            key,
+            format!("must be over 0 and at most 1 (a fraction of H), not {v}"),
+        ))
+    }
 }
 
 /// A node rule's gap (`beside`, `rear`), metres: 0 or more and under 1, else an error at `key`.
