@@ -32,6 +32,8 @@ pub struct Detected {
     pub frame: Option<FrameReport>,
     /// A warning about the units the extent suggests (names the input).
     pub units_warning: Option<String>,
+    /// A warning that the floor seems not to be at z = 0 (names the input).
+    pub floor_warning: Option<String>,
 }
 
 /// Why an input gave no detection.
@@ -122,6 +124,7 @@ fn detect_in(
         segments,
         frame: input.frame,
         units_warning: input.units_warning,
+        floor_warning: input.floor_warning,
     })
 }
 

@@ -38,6 +38,8 @@ pub struct Input {
     pub frame: Option<FrameReport>,
     /// A warning about the units the extent suggests.
     pub units_warning: Option<String>,
+    /// A warning that the floor seems not to be at z = 0 ([`cloud::frame::check_floor`]).
+    pub floor_warning: Option<String>,
 }
 
 /// What went wrong turning a file into a world-frame cloud.
@@ -156,13 +158,26 @@ fn world(
             })?;
         (c, Some(r))
     };
-    let units_warning = cloud::frame::check_units(&cloud).map(|w| format!("{label}: {w}"));
+    let extent = cloud::robust_extent(&cloud);
+    let named = |w: String| format!("{label}: {w}");
+    let units_warning = extent
+        .as_ref()
+        .and_then(|e| cloud::frame::units_warning(&cloud, e))
+        .map(named);
+    // A levelled cloud has its floor at z = 0 by construction.
+    let levelled = frame.as_ref().is_some_and(|f| f.floor.is_some());
+    let floor_warning = extent
+        .as_ref()
+        .filter(|_| !levelled)
+        .and_then(cloud::frame::floor_warning)
+        .map(named);
     Ok(Input {
         part,
         cloud,
         dropped_non_finite: loaded.dropped_non_finite,
         frame,
         units_warning,
+        floor_warning,
     })
 }
 

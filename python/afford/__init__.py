@@ -124,7 +124,8 @@ class Result:
         affordance_ids: every affordance id of the hierarchies run.
         runs: one ``Run`` per body and hierarchy.
         frame: the command line's note of what was done to the frame, or None.
-        warnings: warnings about the input (units that look wrong).
+        warnings: warnings about the input (units that look wrong, a floor not at
+            z = 0).
     """
 
     def __init__(self, data: Dict[str, Any]) -> None:
@@ -138,7 +139,9 @@ class Result:
         self.affordance_ids: List[str] = list(data["ids"])
         self.runs: List[Run] = [Run(*r) for r in data["runs"]]
         self.frame: Optional[str] = data["frame"]
-        self.warnings: List[str] = [w for w in [data["units_warning"]] if w]
+        self.warnings: List[str] = [
+            w for w in [data["units_warning"], data["floor_warning"]] if w
+        ]
         self.detections: List[Detection] = [
             Detection(
                 index=i,

@@ -205,6 +205,7 @@ fn detected_dict<'py>(py: Python<'py>, d: &Detected, n: usize) -> PyResult<Bound
     o.set_item("transform", matrix.into_pyarray(py))?;
     o.set_item("frame", d.frame.as_ref().map(|f| f.to_string()))?;
     o.set_item("units_warning", d.units_warning.clone())?;
+    o.set_item("floor_warning", d.floor_warning.clone())?;
     Ok(o)
 }
 

@@ -156,6 +156,15 @@ def test_a_camera_frame_in_millimetres_with_nan_rows(points, result, cli, tmp_pa
     assert len(floor) > len(world) // 4 and abs(np.median(floor)) < 0.01
 
 
+def test_a_floor_away_from_zero_is_a_warning(points, result):
+    assert result.warnings == []
+    low = points - np.array([0.0, 0.0, 1.3])
+    r = afford.detect(low, name="low", affordances="sitting")
+    assert len(r.warnings) == 1 and "--floor auto" in r.warnings[0], r.warnings
+    r = afford.detect(low, name="low", affordances="sitting", floor="auto")
+    assert r.warnings == [] and len(r.detections) > 0
+
+
 def test_an_array_of_the_wrong_shape_is_a_value_error(points):
     with pytest.raises(ValueError, match=r"shape \(N, 3\), got shape \(89833, 2\)"):
         afford.detect(points[:, :2])

@@ -601,7 +601,11 @@ fn find_floor(
 /// millimetres; the spacing is the nearest-neighbour distance at up to [`UNITS_QUERIES`]
 /// points ([`spacing::neighbour_distance`]), whose memory follows those points.
 pub fn check_units(cloud: &PointCloud) -> Option<String> {
-    let extent = spacing::robust_extent(cloud)?;
+    units_warning(cloud, &spacing::robust_extent(cloud)?)
+}
+
+/// [`check_units`] for a cloud whose robust extent is `extent`.
+pub(crate) fn units_warning(cloud: &PointCloud, extent: &spacing::Extent) -> Option<String> {
     if extent.n < 10 {
         return None;
     }
@@ -611,7 +615,7 @@ pub fn check_units(cloud: &PointCloud) -> Option<String> {
     if !diag.is_finite() || diag <= CM_DIAGONAL {
         return None;
     }
-    let spacing = spacing::neighbour_distance(cloud, &extent, 1, UNITS_QUERIES)?;
+    let spacing = spacing::neighbour_distance(cloud, extent, 1, UNITS_QUERIES)?;
     if diag > 100.0 && spacing >= 1.0 {
         Some(format!(
             "the cloud is {diag:.0} units across with points about {spacing:.2} apart: it \
@@ -630,6 +634,41 @@ pub fn check_units(cloud: &PointCloud) -> Option<String> {
         None
     }
 }
+
+/// A warning when the cloud's lowest points lie more than [`FLOOR_OFF_M`] below or above
+/// z = 0, where the detector takes the floor to be, or `None`.
+///
+/// "Lowest" is the 1 % quantile of z of an even sample ([`spacing::robust_extent`]), so a
+/// few stray points under the floor do not count. A cloud whose floor is elsewhere (a
+/// depth-camera frame, whose origin is the camera; a building's coordinates; a file whose
+/// up axis is not z) gives no seat where one is, or one where none is; the warning names
+/// the flags that fix it. Meant for clouds the floor finder did not level.
+pub fn check_floor(cloud: &PointCloud) -> Option<String> {
+    floor_warning(&spacing::robust_extent(cloud)?)
+}
+
+/// [`check_floor`] for a cloud whose robust extent is `extent`.
+pub(crate) fn floor_warning(extent: &spacing::Extent) -> Option<String> {
+    let low = extent.lo.z;
+    if extent.n < 10 || !low.is_finite() || low.abs() <= FLOOR_OFF_M {
+        return None;
+    }
+    let how = if low < 0.0 {
+        "1% of the points lie below"
+    } else {
+        "the lowest points lie at"
+    };
+    Some(format!(
+        "{how} z = {low:.2} m, but the detector takes the floor to be at z = 0 (z up): if \
+         the floor is elsewhere, give --floor auto (--camera for a depth-camera frame, --up \
+         for another up axis)"
+    ))
+}
+
+/// Distance (metres) from z = 0 of a cloud's lowest points beyond which [`check_floor`]
+/// warns: a floor 0.25 m off moves a 0.45 m seat to 0.20 or 0.70 m, out of the seat
+/// heights sitting looks for at 1.75 m (0.25-0.70 m).
+pub const FLOOR_OFF_M: f64 = 0.25;
 
 /// Diagonal (in the file's units) above which [`check_units`] suspects centimetres: a
 /// room read as metres is under 20 m across, in centimetres several hundred.
@@ -1021,6 +1060,30 @@ mod tests {
         // Under 20 units across is metres however sparse: a 10 m yard sampled every metre.
         let yard = PointCloud::new(rect(0.0, 10.0, 0.0, 5.0, 0.0, 1.0));
         assert_eq!(check_units(&yard), None);
+    }
+
+    #[test]
+    fn a_floor_away_from_zero_is_named() {
+        // A 3 x 3 m floor at 5 cm with a 0.45 m box on it, moved to height `dz`.
+        let room = |dz: f64| {
+            let mut v = rect(0.0, 3.0, 0.0, 3.0, 0.0, 0.05);
+            v.extend(box_points(1.0, 1.5, 1.0, 1.5, 0.45, 0.05));
+            PointCloud::new(v.iter().map(|p| p + Vector3::new(0.0, 0.0, dz)).collect())
+        };
+        assert_eq!(check_floor(&room(0.0)), None);
+        // Within FLOOR_OFF_M either way: sensor noise, a floor fitted a little off.
+        assert_eq!(check_floor(&room(-0.2)), None);
+        assert_eq!(check_floor(&room(0.2)), None);
+        // A camera frame's origin is the camera, ~1.3 m over the floor.
+        let w = check_floor(&room(-1.3)).expect("a floor below zero");
+        assert!(w.contains("z = -1.30") && w.contains("--floor auto"), "{w}");
+        let w = check_floor(&room(0.8)).expect("a floor above zero");
+        assert!(w.contains("z = 0.80") && w.contains("--floor auto"), "{w}");
+        // A few stray points far below a floor at zero do not count.
+        let mut strays = room(0.0).points;
+        let n = strays.len() / 200;
+        strays.extend((0..n).map(|i| Point3::new(i as f64 * 0.01, 0.0, -2.0)));
+        assert_eq!(check_floor(&PointCloud::new(strays)), None);
     }
 }
 

@@ -25,6 +25,7 @@ mod xyz;
 pub use pcd::{read_pcd, write_pcd};
 pub(crate) use ply::{parse_header, write_ply_typed, Encoding, Kind, Scalar};
 pub use ply::{read_ply, read_ply_property, write_ply_points};
+pub(crate) use spacing::robust_extent;
 pub use spacing::{point_spacing, TileSpacing};
 pub use xyz::read_xyz;
 

@@ -622,7 +622,10 @@ fn notes(input: &Input, path: &Path, err: &mut dyn Write) {
             input.dropped_non_finite
         );
     }
-    if let Some(w) = &input.units_warning {
+    for w in [&input.units_warning, &input.floor_warning]
+        .into_iter()
+        .flatten()
+    {
         let _ = writeln!(err, "warning: {w}");
     }
     if let Some(f) = &input.frame {

@@ -8,6 +8,7 @@ mod empty_inputs;
 mod eval_convert_up;
 mod eval_scores_detect;
 mod fine_voxel_budget;
+mod floor_not_at_zero;
 mod header_count_too_small;
 mod huge_coordinates;
 mod large_connected_floor;
