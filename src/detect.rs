@@ -7,11 +7,12 @@ use std::sync::OnceLock;
 use nalgebra::Point3;
 use rayon::prelude::*;
 
-use crate::cloud::PointCloud;
+use crate::cloud::{point_spacing, PointCloud};
 use crate::method::extent::{guard, ExtentConfig, ExtentError};
 use crate::method::fit::{fit, ContactConfig, Fit};
 use crate::method::heightmap::{HeightMap, HeightMapConfig};
 use crate::method::hypotheses::{hypotheses, Hypothesis};
+use crate::method::isolated::without_isolated;
 use crate::method::scene::{Scene, SceneConfig};
 use crate::method::select::{segment_in, suppress, SegmentConfig, SegmentGrid};
 use crate::method::unfold::{unfold, Unfolded};
@@ -30,6 +31,12 @@ pub struct DetectConfig {
     pub contact: ContactConfig,
     /// Region growing.
     pub segment: SegmentConfig,
+    /// Isolated points ([`crate::method::isolated`]): a point alone in its cube and the
+    /// 26 round it is left out of the height map and the scene. The cubes' edge is this
+    /// many times the cloud's point spacing ([`crate::cloud::point_spacing`])...
+    pub isolated_spacings: f64,
+    /// ...and at least this, metres.
+    pub isolated_min_cell: f64,
 }
 
 /// The default voxel edge, metres: at most 0.02 m, finer than the 3-4 cm radius of the
@@ -74,6 +81,14 @@ impl DetectConfig {
                 // A chair has a few thousand points in a view; a room-sized segment means a leak.
                 max_points: 200_000,
             },
+            // 1.5: a surface's points have their four nearest neighbours about one
+            // spacing away (the spacing is the median distance to the fourth), so a point
+            // with none within 1.5 spacings, nor in the cubes round its own, is on no
+            // surface the scan sampled densely.
+            isolated_spacings: 1.5,
+            // 0.04 m: surfaces sampled more sparsely than the cloud's median (mesh
+            // vertices 4 cm apart, the far wall of a room view) keep a neighbour within it.
+            isolated_min_cell: 0.04,
         }
     }
 }
@@ -200,14 +215,21 @@ pub fn detect_all(cloud: &PointCloud, models: &[Model], cfg: &DetectConfig) -> V
 
 /// The grids of `cloud` (world frame, metres; read from `path`, which names it in
 /// messages) as every command builds them: from the points the extent guard
-/// ([`crate::method::extent::guard`], default limits) keeps. Refuses what the guard refuses.
+/// ([`crate::method::extent::guard`], default limits) keeps, less the isolated ones
+/// ([`crate::method::isolated`]). Refuses what the guard refuses.
 pub fn prepare_guarded(
     path: &Path,
     cloud: &PointCloud,
     cfg: &DetectConfig,
 ) -> Result<Prepared, ExtentError> {
     let kept = guard(path, cloud, cfg, &ExtentConfig::default())?;
-    Ok(prepare(&kept.cloud, cfg))
+    let cell = point_spacing(&kept.cloud)
+        .map_or(0.0, |s| cfg.isolated_spacings * s)
+        .max(cfg.isolated_min_cell);
+    Ok(match without_isolated(&kept.cloud, cell) {
+        Some((surface, _)) => prepare(&surface, cfg),
+        None => prepare(&kept.cloud, cfg),
+    })
 }
 
 /// Detection on one input cloud, the one per-file path of `afford detect`, `afford eval`,
