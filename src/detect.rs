@@ -12,9 +12,9 @@ use crate::method::extent::{guard, ExtentConfig, ExtentError};
 use crate::method::fit::{fit, ContactConfig, Fit};
 use crate::method::heightmap::{HeightMap, HeightMapConfig};
 use crate::method::hypotheses::{hypotheses, Hypothesis};
-use crate::method::isolated::without_isolated;
 use crate::method::scene::{Scene, SceneConfig};
 use crate::method::select::{segment_in, suppress, SegmentConfig, SegmentGrid};
+use crate::method::specks::without_specks;
 use crate::method::unfold::{unfold, Unfolded};
 use crate::model::agent::{Agent, Cylinder};
 use crate::model::hierarchy::Hierarchy;
@@ -31,12 +31,16 @@ pub struct DetectConfig {
     pub contact: ContactConfig,
     /// Region growing.
     pub segment: SegmentConfig,
-    /// Isolated points ([`crate::method::isolated`]): a point alone in its cube and the
-    /// 26 round it is left out of the height map and the scene. The cubes' edge is this
-    /// many times the cloud's point spacing ([`crate::cloud::point_spacing`])...
-    pub isolated_spacings: f64,
-    /// ...and at least this, metres.
-    pub isolated_min_cell: f64,
+    /// Specks ([`crate::method::specks`]): points in a component of at most
+    /// `speck_cubes` occupied cubes, joined through faces, edges and corners, are left out
+    /// of the height map and the scene. The cubes' edge is `speck_spacings` times the
+    /// cloud's point spacing ([`crate::cloud::point_spacing`]), and at least
+    /// `speck_min_cell` metres.
+    pub speck_spacings: f64,
+    /// See `speck_spacings`.
+    pub speck_min_cell: f64,
+    /// See `speck_spacings`.
+    pub speck_cubes: usize,
 }
 
 /// The default voxel edge, metres: at most 0.02 m, finer than the 3-4 cm radius of the
@@ -82,13 +86,15 @@ impl DetectConfig {
                 max_points: 200_000,
             },
             // 1.5: a surface's points have their four nearest neighbours about one
-            // spacing away (the spacing is the median distance to the fourth), so a point
-            // with none within 1.5 spacings, nor in the cubes round its own, is on no
-            // surface the scan sampled densely.
-            isolated_spacings: 1.5,
+            // spacing away (the spacing is the median distance to the fourth), so the
+            // cubes of a densely sampled surface join up.
+            speck_spacings: 1.5,
             // 0.04 m: surfaces sampled more sparsely than the cloud's median (mesh
-            // vertices 4 cm apart, the far wall of a room view) keep a neighbour within it.
-            isolated_min_cell: 0.04,
+            // vertices 4 cm apart, the far wall of a room view) still join up.
+            speck_min_cell: 0.04,
+            // 8 cubes (0.04-0.16 m across): a clump of stray returns or a floating
+            // fragment; anything a forearm or a body rests on spans more.
+            speck_cubes: 8,
         }
     }
 }
@@ -215,8 +221,8 @@ pub fn detect_all(cloud: &PointCloud, models: &[Model], cfg: &DetectConfig) -> V
 
 /// The grids of `cloud` (world frame, metres; read from `path`, which names it in
 /// messages) as every command builds them: from the points the extent guard
-/// ([`crate::method::extent::guard`], default limits) keeps, less the isolated ones
-/// ([`crate::method::isolated`]). Refuses what the guard refuses.
+/// ([`crate::method::extent::guard`], default limits) keeps, less the specks
+/// ([`crate::method::specks`]). Refuses what the guard refuses.
 pub fn prepare_guarded(
     path: &Path,
     cloud: &PointCloud,
@@ -224,9 +230,9 @@ pub fn prepare_guarded(
 ) -> Result<Prepared, ExtentError> {
     let kept = guard(path, cloud, cfg, &ExtentConfig::default())?;
     let cell = point_spacing(&kept.cloud)
-        .map_or(0.0, |s| cfg.isolated_spacings * s)
-        .max(cfg.isolated_min_cell);
-    Ok(match without_isolated(&kept.cloud, cell) {
+        .map_or(0.0, |s| cfg.speck_spacings * s)
+        .max(cfg.speck_min_cell);
+    Ok(match without_specks(&kept.cloud, cell, cfg.speck_cubes) {
         Some((surface, _)) => prepare(&surface, cfg),
         None => prepare(&kept.cloud, cfg),
     })
