@@ -552,19 +552,20 @@ fn reaches(
     } else {
         tiles
     };
-    // Looked up once per point, for the passes of the map, in parallel pieces.
-    cloud
-        .points
-        .par_chunks(piece)
-        .flat_map_iter(|points| {
-            tiles.at_each(points).map(|t| {
-                global.map_or(0.0, |g| {
+    // Looked up once per point, for the passes of the map, in parallel pieces written
+    // in place.
+    let mut out = vec![0.0; cloud.len()];
+    out.par_chunks_mut(piece)
+        .zip(cloud.points.par_chunks(piece))
+        .for_each(|(out, points)| {
+            for (r, t) in out.iter_mut().zip(tiles.at_each(points)) {
+                *r = global.map_or(0.0, |g| {
                     let s = t.map_or(g, |t| t.max(g));
                     (cfg.sample_reach * s).min(cfg.max_reach)
-                })
-            })
-        })
-        .collect()
+                });
+            }
+        });
+    out
 }
 
 /// The top of the lowest stack of the sorted heights `column` standing on the floor
