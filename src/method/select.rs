@@ -4,7 +4,7 @@
 
 use nalgebra::Point3;
 
-use crate::cellhash::{key_runs, CellMap};
+use crate::cellhash::CellMap;
 use crate::cloud::PointCloud;
 use crate::num::{floor_i64, index32, to_i64};
 
@@ -183,42 +183,48 @@ impl CellIndex {
     fn new(
         cloud: &PointCloud,
         floor_height: f64,
-        key: &(impl Fn(&Point3<f64>) -> (i64, i64, i64) + Sync),
+        key: &impl Fn(&Point3<f64>) -> (i64, i64, i64),
     ) -> Self {
-        // The cells of runs of points in one cell (as a depth image's rows give), found
-        // in parallel pieces: each cell is looked up once per run, ids given in the
-        // order of the cells' first points.
-        let runs = key_runs(&cloud.points, |p| (p.z >= floor_height).then(|| key(p)));
         let mut ids: CellMap<(i64, i64, i64), u32> = CellMap::default();
         let mut first: Vec<u32> = Vec::new();
         let mut count: Vec<u32> = Vec::new();
-        let of_run: Vec<u32> = runs
-            .iter()
-            .map(|(k, r)| {
-                let c = *ids.entry(*k).or_insert_with(|| {
-                    first.push(index32(r.start));
-                    count.push(0);
-                    index32(first.len() - 1)
-                });
-                count[c as usize] += index32(r.len());
-                c
-            })
-            .collect();
+        let mut cell_of: Vec<u32> = vec![NO_CELL; cloud.len()];
+        // The last cell looked up and its id: a run of points in one cell (as a depth
+        // image's rows give) looks it up once.
+        let mut last: Option<((i64, i64, i64), u32)> = None;
+        for (i, p) in cloud.points.iter().enumerate() {
+            if p.z >= floor_height {
+                let k = key(p);
+                let c = match last {
+                    Some((lk, c)) if lk == k => c,
+                    _ => {
+                        let c = *ids.entry(k).or_insert_with(|| {
+                            first.push(index32(i));
+                            count.push(0);
+                            index32(first.len() - 1)
+                        });
+                        last = Some((k, c));
+                        c
+                    }
+                };
+                count[c as usize] += 1;
+                cell_of[i] = c;
+            }
+        }
         let mut start = Vec::with_capacity(count.len());
         let mut next = 0u32;
         for &n in &count {
             start.push(next);
             next += n;
         }
-        // Each run's points, in index order, at the end of its cell's entries so far.
         let mut fill = start.clone();
         let mut entries = vec![0u32; next as usize];
-        for ((_, r), &c) in runs.iter().zip(&of_run) {
-            let f = &mut fill[c as usize];
-            for (e, i) in entries[*f as usize..].iter_mut().zip(r.clone()) {
-                *e = index32(i);
+        for (i, &c) in cell_of.iter().enumerate() {
+            if c != NO_CELL {
+                let f = &mut fill[c as usize];
+                entries[*f as usize] = index32(i);
+                *f += 1;
             }
-            *f += index32(r.len());
         }
         CellIndex {
             ids,
@@ -513,57 +519,6 @@ mod tests {
             }
         )
         .is_empty());
-    }
-
-    /// A cloud listed row by row, as a depth image lists it (long runs of points in one
-    /// cell, across the pieces in which the cells are found), with floor points between
-    /// the rows: [`segment`] against [`segment_reference`] at 1 and 2 threads.
-    #[test]
-    fn segment_of_rows_in_pieces_equals_the_reference() {
-        use crate::cellhash::on_threads;
-        let mut pts = Vec::new();
-        for j in 0..160 {
-            for i in 0..220 {
-                // A seat and a back 3 cm above its edge (a segment of their own), with a
-                // gap at x = 1.2 m (two seats).
-                let x = i as f64 * 0.008 + if i >= 150 { 0.05 } else { 0.0 };
-                let y = j as f64 * 0.008;
-                pts.push(Point3::new(
-                    x,
-                    y,
-                    if j < 100 { 0.45 } else { 0.48 + y - 0.8 },
-                ));
-            }
-            pts.push(Point3::new(0.5, j as f64 * 0.008, 0.0));
-        }
-        let cloud = PointCloud::new(pts);
-        let cfg = SegmentConfig {
-            grow_distance: 0.03,
-            floor_height: 0.05,
-            seed_radius: 0.15,
-            max_points: 200_000,
-        };
-        let seeds = [Point3::new(0.5, 0.3, 0.45), Point3::new(1.5, 0.3, 0.45)];
-        let want = segment_reference(&cloud, &seeds, &cfg);
-        let count = |s| want.iter().filter(|&&l| l == Some(s)).count();
-        assert!(
-            count(0) > 10_000 && count(1) > 5_000,
-            "{} {}",
-            count(0),
-            count(1)
-        );
-        // Cut off mid-growth, where the order of taking decides which points are in.
-        let capped = SegmentConfig {
-            max_points: 9_000,
-            ..cfg
-        };
-        let want_capped = segment_reference(&cloud, &seeds, &capped);
-        for threads in [1, 2] {
-            let got = on_threads(threads, || segment(&cloud, &seeds, &cfg));
-            assert!(got == want, "{threads} threads");
-            let got = on_threads(threads, || segment(&cloud, &seeds, &capped));
-            assert!(got == want_capped, "{threads} threads, capped");
-        }
     }
 
     #[test]
