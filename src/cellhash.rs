@@ -6,6 +6,9 @@
 
 use std::collections::{HashMap, HashSet};
 use std::hash::{BuildHasherDefault, Hasher};
+use std::ops::Range;
+
+use rayon::prelude::*;
 
 /// A hash map keyed by cells, hashed by [`CellHasher`].
 pub(crate) type CellMap<K, V> = HashMap<K, V, BuildHasherDefault<CellHasher>>;
@@ -43,9 +46,114 @@ impl Hasher for CellHasher {
     }
 }
 
+/// Items per piece of [`key_runs`]: a piece's keys cost tens of microseconds, well above
+/// a task's overhead on rayon's pool. The runs do not depend on it.
+const RUN_PIECE: usize = 16 * 1024;
+
+/// The maximal runs of consecutive `items` with one key (`key` of `None`: in no run), in
+/// order, each with its key and its items' index range: what a loop over the items that
+/// looks a cell up once per run of points in it (as a depth image's rows give) sees. The
+/// keys are computed in parallel pieces of [`RUN_PIECE`] items, and a run cut by a
+/// piece's border is joined again, so the runs are the same whatever the thread count.
+pub(crate) fn key_runs<T, K>(
+    items: &[T],
+    key: impl Fn(&T) -> Option<K> + Sync,
+) -> Vec<(K, Range<usize>)>
+where
+    T: Sync,
+    K: Copy + PartialEq + Send,
+{
+    let pieces: Vec<Vec<(K, Range<usize>)>> = items
+        .par_chunks(RUN_PIECE)
+        .enumerate()
+        .map(|(n, piece)| {
+            let base = n * RUN_PIECE;
+            let mut runs: Vec<(K, Range<usize>)> = Vec::new();
+            for (i, item) in piece.iter().enumerate() {
+                let Some(k) = key(item) else { continue };
+                match runs.last_mut() {
+                    Some((lk, r)) if *lk == k && r.end == base + i => r.end += 1,
+                    _ => runs.push((k, base + i..base + i + 1)),
+                }
+            }
+            runs
+        })
+        .collect();
+    let mut out: Vec<(K, Range<usize>)> = Vec::with_capacity(pieces.iter().map(Vec::len).sum());
+    for piece in pieces {
+        let mut rest = piece.into_iter().peekable();
+        if let (Some((lk, last)), Some((k, first))) = (out.last_mut(), rest.peek()) {
+            if lk == k && last.end == first.start {
+                last.end = first.end;
+                rest.next();
+            }
+        }
+        out.extend(rest);
+    }
+    out
+}
+
+/// `f` run on a pool of `threads` threads, for tests that compare results across thread
+/// counts.
+#[cfg(test)]
+pub(crate) fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a test pool")
+        .install(f)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The runs one loop over the items finds, for [`key_runs`] to be compared with.
+    fn runs_one_by_one(
+        items: &[i64],
+        key: impl Fn(&i64) -> Option<i64>,
+    ) -> Vec<(i64, Range<usize>)> {
+        let mut runs: Vec<(i64, Range<usize>)> = Vec::new();
+        for (i, item) in items.iter().enumerate() {
+            let Some(k) = key(item) else { continue };
+            match runs.last_mut() {
+                Some((lk, r)) if *lk == k && r.end == i => r.end += 1,
+                _ => runs.push((k, i..i + 1)),
+            }
+        }
+        runs
+    }
+
+    /// Runs across the pieces' borders (a run longer than a piece, one ending at a border,
+    /// a gap of keyless items at one) are the runs of one loop, at 1 and 3 threads.
+    #[test]
+    fn runs_in_pieces_are_the_runs_of_one_loop() {
+        let mut items: Vec<i64> = Vec::new();
+        // A run of 2.5 pieces, then short runs, then keyless items round a border.
+        items.extend(std::iter::repeat_n(7, RUN_PIECE * 5 / 2));
+        items.extend((0..RUN_PIECE as i64 / 2).map(|i| i / 3));
+        items.extend(std::iter::repeat_n(-1, 10));
+        items.extend(std::iter::repeat_n(5, RUN_PIECE));
+        // The same key on both sides of a border, once joined and once split by a gap.
+        let border = items.len().next_multiple_of(RUN_PIECE);
+        items.resize(border, 9);
+        items.extend([9, 9, -1, 9, 4]);
+        let key = |v: &i64| (*v >= 0).then_some(*v % 10);
+        let want = runs_one_by_one(&items, key);
+        for threads in [1, 3] {
+            assert_eq!(
+                on_threads(threads, || key_runs(&items, key)),
+                want,
+                "{threads} threads"
+            );
+        }
+        // Without the join at the borders there would be more runs.
+        let pieces: usize = items
+            .chunks(RUN_PIECE)
+            .map(|c| runs_one_by_one(c, key).len())
+            .sum();
+        assert!(pieces > want.len());
+    }
 
     /// Cells near one another land in different buckets: the hashes of a 20^3 block of
     /// keys (tuples and arrays, as the users key) are all distinct.

@@ -48,23 +48,33 @@ pub(crate) struct Extent {
 /// The robust extent of `cloud`; `None` without finite points.
 pub(crate) fn robust_extent(cloud: &PointCloud) -> Option<Extent> {
     let finite = |p: &&Point3<f64>| p.coords.iter().all(|c| c.is_finite());
-    let n = cloud.points.iter().filter(finite).count();
+    // Counted in parallel; when every point is finite (as every cloud read is), the
+    // sample is every `step`-th point, without filtering them again.
+    let n = cloud.points.par_iter().filter(finite).count();
     if n == 0 {
         return None;
     }
     let step = n.div_ceil(EXTENT_SAMPLE);
-    let sample: Vec<&Point3<f64>> = cloud.points.iter().filter(finite).step_by(step).collect();
+    let sample: Vec<&Point3<f64>> = if n == cloud.len() {
+        cloud.points.iter().step_by(step).collect()
+    } else {
+        cloud.points.iter().filter(finite).step_by(step).collect()
+    };
     let cut = to_usize(sample.len() as f64 * EXTENT_TRIM);
-    let mut lo = Point3::origin();
-    let mut hi = Point3::origin();
-    for axis in 0..3 {
-        let mut v: Vec<f64> = sample.iter().map(|p| p[axis]).collect();
-        // The values at two ranks of the sorted order (`total_cmp` orders every f64, and
-        // values it calls equal have the same bits): found by selection, not a sort.
-        let top = v.len() - 1 - cut;
-        lo[axis] = *v.select_nth_unstable_by(cut, f64::total_cmp).1;
-        hi[axis] = *v.select_nth_unstable_by(top, f64::total_cmp).1;
-    }
+    // The axes side by side: per axis, the values at two ranks of the sorted order
+    // (`total_cmp` orders every f64, and values it calls equal have the same bits),
+    // found by selection, not a sort.
+    let ranks: Vec<(f64, f64)> = (0..3)
+        .into_par_iter()
+        .map(|axis| {
+            let mut v: Vec<f64> = sample.iter().map(|p| p[axis]).collect();
+            let top = v.len() - 1 - cut;
+            let lo = *v.select_nth_unstable_by(cut, f64::total_cmp).1;
+            (lo, *v.select_nth_unstable_by(top, f64::total_cmp).1)
+        })
+        .collect();
+    let lo = Point3::new(ranks[0].0, ranks[1].0, ranks[2].0);
+    let hi = Point3::new(ranks[0].1, ranks[1].1, ranks[2].1);
     Some(Extent { n, lo, hi })
 }
 
@@ -489,6 +499,60 @@ mod tests {
         for step in [0.005, 0.04, 0.1] {
             let s = point_spacing(&grid(step, 60)).unwrap();
             assert!((s - step).abs() < 1e-9, "step {step}: {s}");
+        }
+    }
+
+    /// The robust extent (points counted in parallel, axes side by side, the sample
+    /// taken without a filter when every point is finite) against sorting each axis of
+    /// the filtered sample, bit for bit, at 1 and 2 threads: 40k points (a sample of
+    /// every fourth), with and without points that are not finite.
+    #[test]
+    fn robust_extent_is_the_sorted_samples_quantiles() {
+        use crate::cellhash::on_threads;
+        let mut c = grid(0.01, 200);
+        for (i, p) in c.points.iter_mut().enumerate() {
+            p.z += (i % 7) as f64 * 0.013 - (i % 11) as f64 * 0.007;
+        }
+        let mut nan = c.clone();
+        for i in (0..nan.len()).step_by(997) {
+            nan.points[i].y = if i % 2 == 0 { f64::NAN } else { f64::INFINITY };
+        }
+        for cloud in [&c, &nan] {
+            let finite: Vec<&Point3<f64>> = cloud
+                .points
+                .iter()
+                .filter(|p| p.coords.iter().all(|v| v.is_finite()))
+                .collect();
+            let sample: Vec<&Point3<f64>> = finite
+                .iter()
+                .copied()
+                .step_by(finite.len().div_ceil(EXTENT_SAMPLE))
+                .collect();
+            let cut = to_usize(sample.len() as f64 * EXTENT_TRIM);
+            let (mut lo, mut hi) = (Point3::origin(), Point3::origin());
+            for axis in 0..3 {
+                let mut v: Vec<f64> = sample.iter().map(|p| p[axis]).collect();
+                v.sort_by(f64::total_cmp);
+                lo[axis] = v[cut];
+                hi[axis] = v[v.len() - 1 - cut];
+            }
+            let want = Extent {
+                n: finite.len(),
+                lo,
+                hi,
+            };
+            for threads in [1, 2] {
+                let got = on_threads(threads, || robust_extent(cloud)).unwrap();
+                assert_eq!(got.n, want.n);
+                assert_eq!(
+                    got.lo.coords.map(f64::to_bits),
+                    want.lo.coords.map(f64::to_bits)
+                );
+                assert_eq!(
+                    got.hi.coords.map(f64::to_bits),
+                    want.hi.coords.map(f64::to_bits)
+                );
+            }
         }
     }
 

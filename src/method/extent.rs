@@ -20,7 +20,9 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Point3;
 
-use crate::cellhash::CellMap;
+use rayon::prelude::*;
+
+use crate::cellhash::{key_runs, CellMap};
 use crate::cloud::PointCloud;
 use crate::detect::DetectConfig;
 use crate::num::floor_i64;
@@ -58,6 +60,10 @@ impl Default for ExtentConfig {
         }
     }
 }
+
+/// Points per piece of the coordinate check: tens of microseconds of work, well above a
+/// task's overhead on rayon's pool (the point found does not depend on it).
+const CHECK_PIECE: usize = 16 * 1024;
 
 /// Bytes in a GiB, for messages.
 const GIB: f64 = (1u64 << 30) as f64;
@@ -123,12 +129,25 @@ pub fn guard<'a>(
     detect: &DetectConfig,
     cfg: &ExtentConfig,
 ) -> Result<Guarded<'a>, ExtentError> {
-    if let Some((point, value)) = cloud.points.iter().enumerate().find_map(|(i, p)| {
+    // The first such point in the cloud's order, searched in parallel pieces (each
+    // piece in order, the first piece that has one wins).
+    let bad = |p: &Point3<f64>| {
         p.coords
             .iter()
             .find(|c| !c.is_finite() || c.abs() > cfg.max_coordinate)
-            .map(|&c| (i, c))
-    }) {
+            .copied()
+    };
+    if let Some((point, value)) = cloud
+        .points
+        .par_chunks(CHECK_PIECE)
+        .enumerate()
+        .find_map_first(|(n, piece)| {
+            piece
+                .iter()
+                .enumerate()
+                .find_map(|(i, p)| bad(p).map(|c| (n * CHECK_PIECE + i, c)))
+        })
+    {
         return Err(ExtentError::Coordinate {
             path: path.to_path_buf(),
             point,
@@ -185,30 +204,26 @@ pub fn grid_bytes(extent: [f64; 3], cfg: &DetectConfig, reach: f64) -> f64 {
 /// Per point, whether it lies in a connected region of coarse cubes (edge `cell`, touching
 /// by face, edge or corner) that holds at least `share` of the points, or in the largest.
 fn bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
-    let key = |p: &Point3<f64>| p.coords.map(|c| floor_i64(c / cell));
+    // The cubes of runs of points in one cube (as a depth image's rows give), found in
+    // parallel pieces: each cube is looked up once per run, as one loop over the points
+    // that remembers the last cube does.
+    let runs = key_runs(points, |p| {
+        let k = p.coords.map(|c| floor_i64(c / cell));
+        Some([k.x, k.y, k.z])
+    });
     // Cells numbered in the points' order and only looked up: the map's order is unused.
     let mut cells: CellMap<[i64; 3], usize> = CellMap::default();
-    let mut of_point = Vec::with_capacity(points.len());
     let mut keys: Vec<[i64; 3]> = Vec::new();
-    // The last cell and its number: a run of points in one cube looks it up once.
-    let mut last: Option<([i64; 3], usize)> = None;
-    for p in points {
-        let k = key(p);
-        let k = [k.x, k.y, k.z];
-        let id = match last {
-            Some((lk, id)) if lk == k => id,
-            _ => {
-                let n = cells.len();
-                let id = *cells.entry(k).or_insert_with(|| {
-                    keys.push(k);
-                    n
-                });
-                last = Some((k, id));
-                id
-            }
-        };
-        of_point.push(id);
-    }
+    let of_run: Vec<usize> = runs
+        .iter()
+        .map(|&(k, _)| {
+            let n = cells.len();
+            *cells.entry(k).or_insert_with(|| {
+                keys.push(k);
+                n
+            })
+        })
+        .collect();
     // Union-find over the occupied cells.
     let mut parent: Vec<usize> = (0..keys.len()).collect();
     fn root(parent: &mut [usize], mut i: usize) -> usize {
@@ -232,23 +247,23 @@ fn bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
     }
     let roots: Vec<usize> = (0..keys.len()).map(|i| root(&mut parent, i)).collect();
     let mut count = vec![0usize; keys.len()];
-    for &c in &of_point {
-        count[roots[c]] += 1;
+    for ((_, r), &c) in runs.iter().zip(&of_run) {
+        count[roots[c]] += r.len();
     }
     let largest = count.iter().copied().max().unwrap_or(0);
     let least = share * points.len() as f64;
-    of_point
-        .iter()
-        .map(|&c| {
-            let n = count[roots[c]];
-            n == largest || n as f64 >= least
-        })
-        .collect()
+    let mut keep = vec![false; points.len()];
+    for ((_, r), &c) in runs.iter().zip(&of_run) {
+        let n = count[roots[c]];
+        keep[r.clone()].fill(n == largest || n as f64 >= least);
+    }
+    keep
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cellhash::on_threads;
 
     fn room() -> Vec<Point3<f64>> {
         // A 4 m x 3 m floor sampled every 5 cm.
@@ -273,6 +288,118 @@ mod tests {
         .unwrap();
         assert_eq!(g.dropped, 0);
         assert!(matches!(g.cloud, Cow::Borrowed(_)));
+    }
+
+    /// [`bulk`] as it was, one loop over the points: each point's cube numbered, then
+    /// the regions counted point by point.
+    fn bulk_one_by_one(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
+        let mut cells: CellMap<[i64; 3], usize> = CellMap::default();
+        let mut keys: Vec<[i64; 3]> = Vec::new();
+        let of_point: Vec<usize> = points
+            .iter()
+            .map(|p| {
+                let k = p.coords.map(|c| floor_i64(c / cell));
+                let k = [k.x, k.y, k.z];
+                let n = cells.len();
+                *cells.entry(k).or_insert_with(|| {
+                    keys.push(k);
+                    n
+                })
+            })
+            .collect();
+        // Regions by flooding the cells' neighbourhoods (a different method than the
+        // union-find, for the same regions).
+        let mut region = vec![usize::MAX; keys.len()];
+        for s in 0..keys.len() {
+            if region[s] != usize::MAX {
+                continue;
+            }
+            region[s] = s;
+            let mut stack = vec![s];
+            while let Some(c) = stack.pop() {
+                let k = keys[c];
+                for d in 0..27i64 {
+                    let n = [k[0] + d % 3 - 1, k[1] + d / 3 % 3 - 1, k[2] + d / 9 - 1];
+                    if let Some(&j) = cells.get(&n) {
+                        if region[j] == usize::MAX {
+                            region[j] = s;
+                            stack.push(j);
+                        }
+                    }
+                }
+            }
+        }
+        let mut count = vec![0usize; keys.len()];
+        for &c in &of_point {
+            count[region[c]] += 1;
+        }
+        let largest = count.iter().copied().max().unwrap_or(0);
+        of_point
+            .iter()
+            .map(|&c| {
+                let n = count[region[c]];
+                n == largest || n as f64 >= share * points.len() as f64
+            })
+            .collect()
+    }
+
+    /// The regions found from runs of points in parallel pieces keep the points one loop
+    /// keeps, at 1 and 2 threads: a floor scanned in rows (long runs across the pieces),
+    /// a far region under the share, one above it, and stray points between the rows.
+    #[test]
+    fn bulk_in_pieces_keeps_what_one_loop_keeps() {
+        let mut pts = Vec::new();
+        for j in 0..200 {
+            for i in 0..300 {
+                pts.push(Point3::new(i as f64 * 0.02, j as f64 * 0.02, 0.0));
+            }
+            if j % 50 == 7 {
+                // A stray point far off, alone in its region.
+                pts.push(Point3::new(40.0 + j as f64, -30.0, 2.0));
+            }
+        }
+        // 300 points 10 m away (0.5 %: dropped) and 1200 20 m away (2 %: kept).
+        pts.extend((0..300).map(|i| Point3::new(10.0 + i as f64 * 0.001, 10.0, 1.0)));
+        pts.extend((0..1200).map(|i| Point3::new(-20.0, i as f64 * 0.001, 0.5)));
+        let want = bulk_one_by_one(&pts, 1.0, 0.01);
+        assert_eq!(want.iter().filter(|k| !**k).count(), 304);
+        for threads in [1, 2] {
+            assert_eq!(
+                on_threads(threads, || bulk(&pts, 1.0, 0.01)),
+                want,
+                "{threads} threads"
+            );
+        }
+    }
+
+    /// The point refused is the first one in the cloud's order with a coordinate out of
+    /// range, and its first such coordinate, at 1 and 2 threads: bad points in two
+    /// pieces, the later piece's worse, and two bad coordinates in one point.
+    #[test]
+    fn the_first_bad_coordinate_is_refused() {
+        let mut pts = room();
+        pts.resize(CHECK_PIECE * 3, Point3::new(1.0, 1.0, 0.5));
+        let first = CHECK_PIECE + 5;
+        pts[first] = Point3::new(0.0, 2e7, f64::NAN);
+        pts[first + 1] = Point3::new(f64::INFINITY, 0.0, 0.0);
+        pts[2 * CHECK_PIECE + 1] = Point3::new(-3e7, 0.0, 0.0);
+        let c = PointCloud::new(pts);
+        for threads in [1, 2] {
+            let got = on_threads(threads, || {
+                guard(
+                    Path::new("r.ply"),
+                    &c,
+                    &DetectConfig::default(),
+                    &ExtentConfig::default(),
+                )
+            });
+            match got {
+                Err(ExtentError::Coordinate { point, value, .. }) => {
+                    assert_eq!((point, value), (first, 2e7), "{threads} threads");
+                }
+                other => panic!("{threads} threads: {other:?}"),
+            }
+        }
     }
 
     #[test]
