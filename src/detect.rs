@@ -180,6 +180,16 @@ pub fn prepare(cloud: &PointCloud, cfg: &DetectConfig) -> Prepared {
     Prepared { map, scene }
 }
 
+/// [`prepare`] with the cloud's point spacing already measured
+/// ([`HeightMap::from_cloud_spaced`]).
+fn prepare_spaced(cloud: &PointCloud, cfg: &DetectConfig, spacing: Option<f64>) -> Prepared {
+    let (map, scene) = rayon::join(
+        || HeightMap::from_cloud_spaced(cloud, &cfg.heightmap, spacing),
+        || Scene::new(cloud, &cfg.scene),
+    );
+    Prepared { map, scene }
+}
+
 /// The best unfolded pose at one hypothesis whose root affordance is present, with the
 /// number of stable fits tried.
 pub fn best_at(
@@ -229,12 +239,22 @@ pub fn prepare_guarded(
     cfg: &DetectConfig,
 ) -> Result<Prepared, ExtentError> {
     let kept = guard(path, cloud, cfg, &ExtentConfig::default())?;
-    let cell = point_spacing(&kept.cloud)
+    // The spacing is measured once, for the specks' cubes and the height map. Where it
+    // gives cubes no larger than `speck_min_cell` (every densely sampled cloud), the
+    // specks on those cubes are found beside it; else found again on the larger cubes.
+    let at_min = || without_specks(&kept.cloud, cfg.speck_min_cell, cfg.speck_cubes);
+    let (spacing, specks) = rayon::join(|| point_spacing(&kept.cloud), at_min);
+    let cell = spacing
         .map_or(0.0, |s| cfg.speck_spacings * s)
         .max(cfg.speck_min_cell);
-    Ok(match without_specks(&kept.cloud, cell, cfg.speck_cubes) {
-        Some((surface, _)) => prepare(&surface, cfg),
-        None => prepare(&kept.cloud, cfg),
+    let specks = if cell > cfg.speck_min_cell {
+        without_specks(&kept.cloud, cell, cfg.speck_cubes)
+    } else {
+        specks
+    };
+    Ok(match specks {
+        Some((surface, _)) => prepare_spaced(&surface, cfg, spacing),
+        None => prepare_spaced(&kept.cloud, cfg, spacing),
     })
 }
 

@@ -224,18 +224,32 @@ impl HeightMap {
     /// that far above the floor sees only a roof and is invalid. Each point counts in every
     /// cell whose centre is within `cfg.sample_reach` point spacings of it. An empty cloud gives an empty map.
     pub fn from_cloud(cloud: &PointCloud, cfg: &HeightMapConfig) -> HeightMap {
-        HeightMap::build(cloud, cfg, true, PIECE)
+        HeightMap::build(cloud, cfg, true, PIECE, None)
+    }
+
+    /// [`HeightMap::from_cloud`] with the cloud's point spacing given rather than measured:
+    /// the same map when `spacing` is [`point_spacing`] of `cloud`; the detector passes the
+    /// spacing of the points `cloud` was cut from (less its specks, the same but for the
+    /// few queries that moved).
+    pub fn from_cloud_spaced(
+        cloud: &PointCloud,
+        cfg: &HeightMapConfig,
+        spacing: Option<f64>,
+    ) -> HeightMap {
+        HeightMap::build(cloud, cfg, true, PIECE, Some(spacing))
     }
 
     /// [`HeightMap::from_cloud`]; with `skip_dense` the tiles whose spacing gives a reach
     /// under half a cell are not measured exactly (the same map, bit for bit: see below).
     /// The per-point passes run in parallel pieces of `piece` points (at least 1), merged
-    /// in the points' order: the same map whatever `piece` and the thread count.
+    /// in the points' order: the same map whatever `piece` and the thread count. The
+    /// cloud's spacing is `spacing` when given, else measured.
     fn build(
         cloud: &PointCloud,
         cfg: &HeightMapConfig,
         skip_dense: bool,
         piece: usize,
+        spacing: Option<Option<f64>>,
     ) -> HeightMap {
         let piece = piece.max(1);
         let cell = cfg.cell;
@@ -244,7 +258,7 @@ impl HeightMap {
         };
         let nx = to_usize(((hi.x - lo.x) / cell).floor()) + 1;
         let ny = to_usize(((hi.y - lo.y) / cell).floor()) + 1;
-        let reaches = reaches(cloud, lo, cfg, skip_dense, piece);
+        let reaches = reaches(cloud, lo, cfg, skip_dense, piece, spacing);
         // Every other cell's centre is at least half a cell from the point along x or y:
         // `jx + 0.5 - fx` is at least 0.5 in size (`ix <= fx < ix + 1`, or `fx` beyond the
         // last column, which has no right neighbour) and rounding keeps it so, so a
@@ -505,13 +519,15 @@ impl HeightMap {
 /// `cfg.max_reach`; 0 without a spacing), tiles from the corner `lo`; with `skip_dense`
 /// the tiles whose spacing gives a reach under half a cell are not measured exactly and
 /// their points get the reach of the cloud's spacing, which reaches the same cells and
-/// marks the same tiles (see below).
+/// marks the same tiles (see below). The cloud's spacing is `spacing` when given, else
+/// measured ([`point_spacing`]).
 fn reaches(
     cloud: &PointCloud,
     lo: Point3<f64>,
     cfg: &HeightMapConfig,
     skip_dense: bool,
     piece: usize,
+    spacing: Option<Option<f64>>,
 ) -> Vec<f64> {
     let cell = cfg.cell;
     // Every other cell's centre is at least half a cell from the point along x or y:
@@ -545,7 +561,10 @@ fn reaches(
         }
     };
     // Independent measures of the same points, side by side.
-    let (global, tiles) = rayon::join(|| point_spacing(cloud), || measure(skip_dense));
+    let (global, tiles) = match spacing {
+        Some(global) => (global, measure(skip_dense)),
+        None => rayon::join(|| point_spacing(cloud), || measure(skip_dense)),
+    };
     let no_reach = |g: f64| dense(g) && to_isize((reach_of(g) / cell).ceil()) != 1;
     let tiles = if skip_dense && global.is_some_and(no_reach) {
         measure(false)
@@ -931,7 +950,7 @@ mod tests {
                 pts.push(Point3::new(x, 0.1 + k as f64 * 1e-4, 0.45));
             }
             let cloud = PointCloud::new(pts);
-            let one = bits(&HeightMap::build(&cloud, &cfg, true, usize::MAX));
+            let one = bits(&HeightMap::build(&cloud, &cfg, true, usize::MAX, None));
             let valid = one.1.iter().flatten().count();
             assert!(
                 valid > 50 && cloud.len() > 3000,
@@ -940,7 +959,9 @@ mod tests {
             );
             for threads in [1, 2] {
                 for piece in [1, 7, 1000] {
-                    let m = on_threads(threads, || HeightMap::build(&cloud, &cfg, true, piece));
+                    let m = on_threads(threads, || {
+                        HeightMap::build(&cloud, &cfg, true, piece, None)
+                    });
                     assert!(
                         bits(&m) == one,
                         "round {round}, {threads} threads, piece {piece}"
@@ -1000,8 +1021,8 @@ mod tests {
             }
             let cloud = PointCloud::new(pts);
             for cfg in &configs {
-                let fast = HeightMap::build(&cloud, cfg, true, PIECE);
-                let exact = HeightMap::build(&cloud, cfg, false, PIECE);
+                let fast = HeightMap::build(&cloud, cfg, true, PIECE, None);
+                let exact = HeightMap::build(&cloud, cfg, false, PIECE, None);
                 assert_eq!(
                     (fast.x0, fast.y0, fast.nx, fast.ny, fast.tiles_x),
                     (exact.x0, exact.y0, exact.nx, exact.ny, exact.tiles_x)
