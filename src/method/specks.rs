@@ -213,6 +213,48 @@ mod tests {
     }
 
     #[test]
+    fn pieces_and_threads_do_not_change_the_answer() {
+        // 40 000 plane points (several pieces, the plane's cubes met in many of them) with
+        // strays and clumps between them in the list.
+        let mut pts = plane(0.45, 0.005);
+        let mut strays = Vec::new();
+        for i in 0..30 {
+            let at = Point3::new(0.1 + 0.03 * i as f64, 0.5, 0.9);
+            let clump = if i % 2 == 0 { 1 } else { 6 };
+            for j in 0..clump {
+                strays.push(pts.len() / 30 * i + j);
+                pts.insert(
+                    pts.len() / 30 * i + j,
+                    at + Vector3::new(0.0, 0.0, 0.002 * j as f64),
+                );
+            }
+        }
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| specks(&pts, 0.04, 8))
+        };
+        let one = on(1);
+        assert_eq!(one, on(2));
+        assert_eq!(one, on(3));
+        // The strays 0.03 m apart along x join up into one component of 23 cubes: kept.
+        // Moved off the plane in groups of six 0.3 m apart, they are specks.
+        assert!(one.iter().all(|f| !f));
+        let mut apart = pts.clone();
+        for (n, &i) in strays.iter().enumerate() {
+            apart[i].x = 0.1 + 0.3 * (n / 6) as f64 + 0.001 * (n % 6) as f64;
+            apart[i].y = 2.0;
+        }
+        let flags = specks(&apart, 0.04, 8);
+        let marked: Vec<usize> = (0..apart.len()).filter(|&i| flags[i]).collect();
+        let mut expected = strays.clone();
+        expected.sort_unstable();
+        assert_eq!(marked, expected);
+    }
+
+    #[test]
     fn without_specks_keeps_the_rest_in_order() {
         let mut pts = plane(0.0, 0.02);
         let first = pts.len();
