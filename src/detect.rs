@@ -173,18 +173,21 @@ pub struct Prepared {
 /// independent (each reads only `cloud` and its own config), so they are built side by
 /// side on rayon's pool: the same grids whatever the thread count.
 pub fn prepare(cloud: &PointCloud, cfg: &DetectConfig) -> Prepared {
-    let (map, scene) = rayon::join(
-        || HeightMap::from_cloud(cloud, &cfg.heightmap),
-        || Scene::new(cloud, &cfg.scene),
-    );
-    Prepared { map, scene }
+    prepare_spaced(cloud, cfg, None)
 }
 
-/// [`prepare`] with the cloud's point spacing already measured
-/// ([`HeightMap::from_cloud_spaced`]).
-fn prepare_spaced(cloud: &PointCloud, cfg: &DetectConfig, spacing: Option<f64>) -> Prepared {
+/// [`prepare`], with the cloud's point spacing given when already measured
+/// ([`HeightMap::from_cloud_spaced`]), else measured by the height map.
+fn prepare_spaced(
+    cloud: &PointCloud,
+    cfg: &DetectConfig,
+    spacing: Option<Option<f64>>,
+) -> Prepared {
     let (map, scene) = rayon::join(
-        || HeightMap::from_cloud_spaced(cloud, &cfg.heightmap, spacing),
+        || match spacing {
+            Some(s) => HeightMap::from_cloud_spaced(cloud, &cfg.heightmap, s),
+            None => HeightMap::from_cloud(cloud, &cfg.heightmap),
+        },
         || Scene::new(cloud, &cfg.scene),
     );
     Prepared { map, scene }
@@ -253,8 +256,8 @@ pub fn prepare_guarded(
         specks
     };
     Ok(match specks {
-        Some((surface, _)) => prepare_spaced(&surface, cfg, spacing),
-        None => prepare_spaced(&kept.cloud, cfg, spacing),
+        Some((surface, _)) => prepare_spaced(&surface, cfg, Some(spacing)),
+        None => prepare_spaced(&kept.cloud, cfg, Some(spacing)),
     })
 }
 
