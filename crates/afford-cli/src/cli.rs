@@ -88,6 +88,11 @@ struct SynthArgs {
     /// its depth camera's frame; evaluate with --camera --floor auto).
     #[arg(long, default_value = "world", value_parser = ["world", "camera"])]
     frame: String,
+    /// Probability (0 to 1) that a depth-camera pixel at a depth edge gives a mixed
+    /// ("flying") point between the foreground and the background, as time-of-flight and
+    /// stereo sensors do; 0, the Kinect v1 default, for none.
+    #[arg(long, default_value_t = 0.0, value_parser = probability)]
+    mixed_pixels: f64,
 }
 
 #[derive(clap::Args)]
@@ -318,6 +323,13 @@ fn parse_density(s: &str) -> Result<f64, String> {
     }
 }
 
+fn probability(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(p) if (0.0..=1.0).contains(&p) => Ok(p),
+        _ => Err(format!("'{s}' is not a probability (0 to 1)")),
+    }
+}
+
 /// Most worker threads: far more than the cores of any machine this runs on; more only
 /// spends time starting threads (100,000 took 72 s before the first file).
 pub const MAX_THREADS: usize = 256;
@@ -424,6 +436,7 @@ fn run(command: Command, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Re
                 models: a.models,
                 views: a.views,
                 stride: a.stride,
+                mixed_pixels: a.mixed_pixels,
                 wide: a.mix == "wide",
                 camera_frame: a.frame == "camera",
             },

@@ -717,6 +717,8 @@ pub struct SynthRequest {
     pub views: usize,
     /// Depth-camera pixel stride for generated scenes.
     pub stride: u32,
+    /// Probability of a mixed ("flying") pixel at each depth edge of a depth view.
+    pub mixed_pixels: f64,
     /// Draw from the wide mix (`--mix wide`).
     pub wide: bool,
     /// Write clouds in their camera's frame (`--frame camera`).
@@ -734,7 +736,13 @@ pub fn run_synth(
     std::fs::create_dir_all(&req.out)
         .with_context(|| format!("{}: cannot create", req.out.display()))?;
     if let Some(labels) = &req.models {
-        let s = dataset::views_of_labelled_models(labels, &req.out, req.seed, req.views)?;
+        let s = dataset::views_of_labelled_models(
+            labels,
+            &req.out,
+            req.seed,
+            req.views,
+            req.mixed_pixels,
+        )?;
         let text = format!(
             "wrote {} views and {}\n",
             s.rows.len(),
@@ -746,7 +754,7 @@ pub fn run_synth(
     if !req.meshes.is_empty() {
         let mut failed = false;
         for m in &req.meshes {
-            match dataset::render_mesh_views(m, &req.out, req.seed, req.views) {
+            match dataset::render_mesh_views(m, &req.out, req.seed, req.views, req.mixed_pixels) {
                 Ok(files) => {
                     let text: String = files.iter().map(|f| format!("{}\n", f.display())).collect();
                     if let Err(e) = print(out, &text) {
@@ -777,6 +785,7 @@ pub fn run_synth(
         } else {
             dataset::OutFrame::World
         },
+        mixed_pixels: req.mixed_pixels,
         ..Default::default()
     };
     if let Some(c) = &req.count {

@@ -12,7 +12,13 @@
 //! * dropouts at grazing angles: a hit whose ray makes more than `grazing_start_deg` with
 //!   the surface normal is lost with a probability rising linearly to 1 at
 //!   `grazing_end_deg`;
-//! * a working range: depths outside `min_range..max_range` give no point.
+//! * a working range: depths outside `min_range..max_range` give no point;
+//! * mixed pixels ("flying pixels", off for the default Kinect v1): where the depths of
+//!   two neighbouring cast pixels differ by more than `mixed_jump`, the nearer pixel gives
+//!   with probability `mixed_pixels` a second point on its ray at a depth drawn uniformly
+//!   between the two, as a time-of-flight or stereo sensor that mixes the foreground's
+//!   and the background's returns at a depth edge does. These draw from their own random
+//!   stream, so a view without them is the same bytes as before they existed.
 //!
 //! "Depth" is the distance along the optical axis (as a depth image stores it), not
 //! along the ray. Points are returned in the world frame (metres, z up). The result only
@@ -42,6 +48,10 @@ pub struct SensorNoise {
     pub grazing_start_deg: f64,
     /// Angle between ray and surface normal at which every point drops out, degrees.
     pub grazing_end_deg: f64,
+    /// Probability that a pixel at a depth edge gives a mixed return (0: none).
+    pub mixed_pixels: f64,
+    /// Least depth difference between neighbouring cast pixels that makes an edge, metres.
+    pub mixed_jump: f64,
 }
 
 impl Default for SensorNoise {
@@ -54,6 +64,10 @@ impl Default for SensorNoise {
             quantisation: 2.85e-3,
             grazing_start_deg: 75.0,
             grazing_end_deg: 85.0,
+            // Structured light (Kinect v1) loses edge pixels rather than mixing them.
+            mixed_pixels: 0.0,
+            // 5 cm: a Kinect v2 smears returns across steps of a few centimetres and more.
+            mixed_jump: 0.05,
         }
     }
 }
@@ -68,6 +82,8 @@ impl SensorNoise {
             quantisation: 0.0,
             grazing_start_deg: 90.0,
             grazing_end_deg: 90.0,
+            mixed_pixels: 0.0,
+            mixed_jump: 0.05,
         }
     }
 
@@ -417,7 +433,13 @@ pub fn render_view_triangles(mesh: &Mesh, cam: &Camera, seed: u64) -> (PointClou
     let nz = &cam.noise;
     let mut points = Vec::new();
     let mut tris = Vec::new();
-    for (dir, hit) in hits {
+    // Each cast pixel's measured range along its ray and triangle, for the mixed pixels.
+    let mixing = nz.mixed_pixels > 0.0;
+    let mut measured: Vec<Option<(f64, usize)>> = Vec::new();
+    for (dir, hit) in &hits {
+        if mixing {
+            measured.push(None);
+        }
         let Some(hit) = hit else { continue };
         // Draw the same number of variates per hit, so one pixel does not shift the rest.
         let g = gaussian(&mut rng);
@@ -444,8 +466,67 @@ pub fn render_view_triangles(mesh: &Mesh, cam: &Camera, seed: u64) -> (PointClou
         }
         points.push(cam.position + dir * (zm / cos_axis));
         tris.push(hit.triangle);
+        if let Some(m) = measured.last_mut() {
+            *m = Some((zm / cos_axis, hit.triangle));
+        }
+    }
+    if mixing {
+        mix_edges(
+            cam,
+            &hits,
+            &measured,
+            cols.len(),
+            seed,
+            &mut points,
+            &mut tris,
+        );
     }
     (PointCloud::new(points), tris)
+}
+
+/// Random stream of the mixed pixels, apart from the per-pixel one.
+const MIXED_STREAM: u64 = 0x6d69_7865_645f_7078;
+
+/// Appends the mixed pixels of one view (see the module documentation): for each pair of
+/// neighbouring cast pixels (right and below, row-major over `cols` columns) whose
+/// `measured` ranges differ by more than the camera's `mixed_jump`, with probability
+/// `mixed_pixels`, a point on the nearer pixel's ray (its direction in `hits`) at a range
+/// drawn uniformly between the two, on the nearer pixel's triangle.
+fn mix_edges(
+    cam: &Camera,
+    hits: &[(Vector3<f64>, Option<Hit>)],
+    measured: &[Option<(f64, usize)>],
+    cols: usize,
+    seed: u64,
+    points: &mut Vec<Point3<f64>>,
+    tris: &mut Vec<usize>,
+) {
+    let nz = &cam.noise;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ MIXED_STREAM);
+    for (i, here) in measured.iter().enumerate() {
+        let Some((ri, ti)) = *here else { continue };
+        let right = (cols > 0 && (i + 1) % cols != 0).then_some(i + 1);
+        for j in [right, Some(i + cols)].into_iter().flatten() {
+            let Some(&Some((rj, tj))) = measured.get(j) else {
+                continue;
+            };
+            if (ri - rj).abs() <= nz.mixed_jump {
+                continue;
+            }
+            // The same two draws for every edge pair.
+            let (keep, at) = (rng.random::<f64>(), rng.random::<f64>());
+            if keep >= nz.mixed_pixels {
+                continue;
+            }
+            let (near, far, dir, tri) = if ri < rj {
+                (ri, rj, hits[i].0, ti)
+            } else {
+                (rj, ri, hits[j].0, tj)
+            };
+            points.push(cam.position + dir * (near + at * (far - near)));
+            tris.push(tri);
+        }
+    }
 }
 
 /// Renders one depth view of `mesh` seen by `cam`: the measured points in the world frame
@@ -526,6 +607,51 @@ mod tests {
             (ymax - 2.0 * 28.5f64.to_radians().tan()).abs() < 0.02,
             "{ymax}"
         );
+    }
+
+    #[test]
+    fn mixed_pixels_lie_on_rays_between_an_edge_and_what_is_behind_it() {
+        // A 0.4 m box 1.5 m in front of the wall at x = 2 fills the middle of the view.
+        let mut m = wall_at_2();
+        m.add_box(
+            Point3::new(0.5, -0.2, -0.2),
+            Point3::new(0.9, 0.2, 0.2),
+            Part::Seat,
+        );
+        let clean = Camera {
+            noise: SensorNoise::none(),
+            ..origin_cam()
+        };
+        let mixing = Camera {
+            noise: SensorNoise {
+                mixed_pixels: 1.0,
+                ..clean.noise
+            },
+            ..clean
+        };
+        let (plain, _) = render_view(&m, &clean, 3);
+        let (mixed, parts) = render_view(&m, &mixing, 3);
+        // The measured points come first and are unchanged; the mixed ones follow.
+        assert_eq!(&mixed.points[..plain.len()], &plain.points[..]);
+        let extra = &mixed.points[plain.len()..];
+        assert!(!extra.is_empty(), "the box's outline is a depth edge");
+        for p in extra {
+            // Between the box's front face and the wall, on a ray through the front face
+            // (the nearer pixel of the edge pair): |y| and |z| at most 0.2 / 0.5 of x. The
+            // far end is the neighbour's range, taken along the nearer ray: the wall's
+            // depth give or take the one pixel between the two rays.
+            assert!(p.x > 0.5 - 1e-9 && p.x < 2.0 + 0.01, "{p}");
+            assert!(p.y.abs().max(p.z.abs()) <= 0.4 * p.x + 1e-9, "{p}");
+        }
+        // Every edge pixel of the box's outline mixes with probability 1: about one per
+        // outline pixel (a 0.4 m square at 0.5 m fills ~90 x 90 of the 160 x 120 rays).
+        assert!((150..=800).contains(&extra.len()), "{}", extra.len());
+        assert_eq!(parts.len(), mixed.len());
+        // Seeded: the same view twice is the same points.
+        assert_eq!(render_view(&m, &mixing, 3).0.points, mixed.points);
+        // A plain wall has no edge: nothing is added.
+        let (wall, _) = render_view(&wall_at_2(), &mixing, 3);
+        assert_eq!(wall.len(), 160 * 120);
     }
 
     #[test]

@@ -51,7 +51,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::camera::{render_view_triangles, Camera};
+use super::camera::{render_view_triangles, Camera, SensorNoise};
 use super::furniture::{
     bed, bench, cabinet, desk, recliner, scene_mesh, shelf, sofa, table, BedParams, BenchParams,
     CabinetParams, DeskParams, ReclinerParams, ShelfParams, SofaParams, TableParams,
@@ -1059,6 +1059,9 @@ pub struct DatasetSpec {
     pub mix: Mix,
     /// The frame the clouds are written in.
     pub frame: OutFrame,
+    /// Probability of a mixed ("flying") pixel at each depth edge of a depth view
+    /// ([`SensorNoise::mixed_pixels`]); 0, the Kinect v1 default, for none.
+    pub mixed_pixels: f64,
 }
 
 /// Which world [`generate`] draws from (`afford synth --mix`).
@@ -1113,6 +1116,20 @@ impl Default for DatasetSpec {
             full_noise: 0.003,
             mix: Mix::Default,
             frame: OutFrame::World,
+            mixed_pixels: 0.0,
+        }
+    }
+}
+
+impl DatasetSpec {
+    /// `cam` with this dataset's sensor: its mixed pixels ([`Self::mixed_pixels`]).
+    pub fn seen_by(&self, cam: Camera) -> Camera {
+        Camera {
+            noise: SensorNoise {
+                mixed_pixels: self.mixed_pixels,
+                ..cam.noise
+            },
+            ..cam
         }
     }
 }
@@ -1338,7 +1355,15 @@ pub(super) fn one_scene(kind: SceneKind, class: Class, seed: u64, spec: &Dataset
             let r = footprint_radius(&obj.mesh);
             let az = (yaw + rel_az(&mut rng, wall)).to_radians();
             let dist = u(&mut rng, 1.5, 3.0) + (r - 0.5).max(0.0) * 0.8;
-            let cam = camera_at(&mut rng, 0.0, 0.0, az, dist, obj.focus_height, spec.stride);
+            let cam = spec.seen_by(camera_at(
+                &mut rng,
+                0.0,
+                0.0,
+                az,
+                dist,
+                obj.focus_height,
+                spec.stride,
+            ));
             let (points, parts, labels, doubtful) = render_with_visibility(
                 &scene,
                 &[(0, n, labels, obj.doubtful.clone())],
@@ -1414,7 +1439,9 @@ pub(super) fn one_scene(kind: SceneKind, class: Class, seed: u64, spec: &Dataset
                     break;
                 }
             }
-            let cam = cam.unwrap_or_else(|| camera_at(&mut rng, tx, ty, 0.0, 1.2, tf, spec.stride));
+            let cam = spec.seen_by(
+                cam.unwrap_or_else(|| camera_at(&mut rng, tx, ty, 0.0, 1.2, tf, spec.stride)),
+            );
             let (points, parts, labels, mut doubtful) =
                 render_with_visibility(&scene, &ranges, &cam, mix(seed ^ 3));
             // A low table only matters when nothing else affords sitting.
@@ -1598,6 +1625,7 @@ pub fn render_mesh_views(
     out_dir: &Path,
     seed: u64,
     views: usize,
+    mixed_pixels: f64,
 ) -> Result<Vec<PathBuf>, SynthError> {
     std::fs::create_dir_all(out_dir).map_err(io_err(out_dir))?;
     let model = read_mesh_ply(mesh_path)?;
@@ -1618,7 +1646,8 @@ pub fn render_mesh_views(
         let az = u(&mut rng, -180.0, 180.0).to_radians();
         let dist = u(&mut rng, 1.5, 3.0) + (r - 0.5).max(0.0) * 0.8;
         let focus = (hi.z * 0.5).min(0.6);
-        let cam = camera_at(&mut rng, cx, cy, az, dist, focus, 2);
+        let mut cam = camera_at(&mut rng, cx, cy, az, dist, focus, 2);
+        cam.noise.mixed_pixels = mixed_pixels;
         let (cloud, _) = render_view_triangles(&scene, &cam, mix(seed ^ k as u64 ^ 7));
         let path = out_dir.join(format!("{stem}_v{k:02}.ply"));
         cloud::write_ply_points(&path, &cloud.points, &[], true)?;
@@ -1714,6 +1743,7 @@ pub fn views_of_labelled_models(
     out_dir: &Path,
     seed: u64,
     views_per_model: usize,
+    mixed_pixels: f64,
 ) -> Result<DatasetSummary, SynthError> {
     let lerr = |what: String| SynthError::Labels {
         path: labels_csv.to_path_buf(),
@@ -1733,6 +1763,7 @@ pub fn views_of_labelled_models(
             out_dir,
             mix(seed ^ i as u64),
             views_per_model,
+            mixed_pixels,
         )?;
         for p in paths {
             let points = cloud::read_ply(&p)?.len();

@@ -1115,7 +1115,7 @@ pub(super) fn one_scene_wide(
                 u(&mut rng, -180.0, 180.0)
             };
             let az = (yaw + rel).to_radians();
-            let cam = pitched_camera(
+            let cam = spec.seen_by(pitched_camera(
                 &mut rng,
                 0.0,
                 0.0,
@@ -1124,7 +1124,7 @@ pub(super) fn one_scene_wide(
                 r,
                 spec.stride,
                 MAX_CAMERA_HEIGHT_M,
-            );
+            ));
             let (mut points, mut parts, labels, doubtful) = render_with_visibility(
                 &scene,
                 &[(0, n, labels, obj.doubtful.clone())],
@@ -1227,6 +1227,7 @@ fn wide_room(
                 ..Camera::looking_at(p3(tx + d * az.cos(), ty + d * az.sin(), h), p3(tx, ty, tf))
             }
         });
+        let cam = spec.seen_by(cam);
         let (mut points, mut parts, labels, doubtful) =
             render_with_visibility(&scene, &ranges, &cam, mix(seed ^ 3));
         maybe_subsample(&mut points, &mut parts, &mut rng);
