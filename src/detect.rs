@@ -283,7 +283,7 @@ pub fn detect_all_prepared(
     cfg: &DetectConfig,
 ) -> Vec<Outcome> {
     // The segmentation's cells depend on the cloud and `cfg.segment` only: built once,
-    // when the first model with a detection needs them.
+    // beside the first search with hypotheses to try.
     let grid = OnceLock::new();
     models
         .iter()
@@ -303,7 +303,8 @@ pub fn detect_prepared(
 }
 
 /// [`detect_prepared`], segmenting over the cells in `grid` (built from `cloud` and
-/// `cfg.segment` if not yet there, and only if some detection needs it).
+/// `cfg.segment` if not yet there, beside the search when there are hypotheses, or when
+/// a detection needs them).
 fn detect_prepared_in(
     cloud: &PointCloud,
     prepared: &Prepared,
@@ -313,10 +314,22 @@ fn detect_prepared_in(
     grid: &OnceLock<SegmentGrid>,
 ) -> Outcome {
     let hyps = hypotheses(&prepared.map, &h.hypothesis, h.orientation, agent.height);
-    let results: Vec<(Option<Unfolded>, usize)> = hyps
-        .par_iter()
-        .map(|hyp| best_at(agent, h, &prepared.scene, hyp, cfg))
-        .collect();
+    let search = || -> Vec<(Option<Unfolded>, usize)> {
+        hyps.par_iter()
+            .map(|hyp| best_at(agent, h, &prepared.scene, hyp, cfg))
+            .collect()
+    };
+    // With hypotheses to try, a detection (and so the segmentation's cells) is likely:
+    // the cells are built beside the search rather than after it. They depend on `cloud`
+    // and `cfg.segment` only, so they are the same whenever they are built.
+    let results = if hyps.is_empty() {
+        Vec::new()
+    } else {
+        rayon::join(search, || {
+            grid.get_or_init(|| SegmentGrid::new(cloud, &cfg.segment));
+        })
+        .0
+    };
     let fits = results.iter().map(|r| r.1).sum();
     let candidates: Vec<(usize, Unfolded)> = results
         .into_iter()
