@@ -20,7 +20,7 @@
 use nalgebra::Point3;
 use rayon::prelude::*;
 
-use crate::cellhash::CellMap;
+use crate::cellhash::{CellMap, CellSet};
 use crate::cloud::PointCloud;
 use crate::num::floor_i64;
 
@@ -29,31 +29,32 @@ use crate::num::floor_i64;
 /// documentation). Cube indices saturate at `i64`'s range (the guard refuses coordinates
 /// that far out before this stage runs).
 pub fn specks(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> Vec<bool> {
-    let keys: Vec<[i64; 3]> = points
-        .par_iter()
-        .with_min_len(PIECE)
-        .map(|p| [p.x, p.y, p.z].map(|c| floor_i64(c / cell)))
-        .collect();
-    // The occupied cubes, numbered in the order first met, and each point's number. A
-    // depth image lists row neighbours side by side: a run of points in one cube is
-    // looked up once.
+    in_cubes(points, cell, &speck_cubes(points, cell, max_cubes))
+}
+
+/// The cube of edge `cell` metres holding `p`, as cube indices along x, y and z.
+fn cube_of(p: &Point3<f64>, cell: f64) -> [i64; 3] {
+    [p.x, p.y, p.z].map(|c| floor_i64(c / cell))
+}
+
+/// The occupied cubes of edge `cell` metres of `points` that lie in components of at most
+/// `max_cubes` cubes (see [`specks`]): usually none, and a few where there are specks.
+fn speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[i64; 3]> {
+    // The occupied cubes, numbered in the order first met. A depth image lists row
+    // neighbours side by side: a run of points in one cube is looked up once.
     let mut ids: CellMap<[i64; 3], usize> = CellMap::default();
     let mut cubes: Vec<[i64; 3]> = Vec::new();
-    let mut last: Option<([i64; 3], usize)> = None;
-    let point_cube: Vec<usize> = keys
-        .iter()
-        .map(|k| match last {
-            Some((lk, id)) if lk == *k => id,
-            _ => {
-                let id = *ids.entry(*k).or_insert_with(|| {
-                    cubes.push(*k);
-                    cubes.len() - 1
-                });
-                last = Some((*k, id));
-                id
-            }
-        })
-        .collect();
+    let mut last: Option<[i64; 3]> = None;
+    for p in points {
+        let k = cube_of(p, cell);
+        if last != Some(k) {
+            ids.entry(k).or_insert_with(|| {
+                cubes.push(k);
+                cubes.len() - 1
+            });
+            last = Some(k);
+        }
+    }
     // Union-find over the cubes: each joined with its occupied neighbours on the 13 sides
     // after it in (x, y, z) order, which meets every one of the 26 adjacencies once. The
     // smaller root becomes the parent; the partition is the same in any order.
@@ -83,10 +84,24 @@ pub fn specks(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> Vec<bool> 
     for &r in &roots {
         size[r] += 1;
     }
-    point_cube
+    cubes
+        .iter()
+        .zip(&roots)
+        .filter(|(_, &r)| size[r] <= max_cubes)
+        .map(|(k, _)| *k)
+        .collect()
+}
+
+/// For each point of `points`, whether its cube of edge `cell` metres is one of `cubes`
+/// (all `false` when there are none, without looking).
+fn in_cubes(points: &[Point3<f64>], cell: f64, cubes: &CellSet<[i64; 3]>) -> Vec<bool> {
+    if cubes.is_empty() {
+        return vec![false; points.len()];
+    }
+    points
         .par_iter()
         .with_min_len(PIECE)
-        .map(|&c| size[roots[c]] <= max_cubes)
+        .map(|p| cubes.contains(&cube_of(p, cell)))
         .collect()
 }
 
@@ -108,8 +123,8 @@ const HALF_NEIGHBOURS: [(i64, i64, i64); 13] = [
     (1, 1, 1),
 ];
 
-/// Points per parallel piece of the key and answer passes: the same keys and answers
-/// whatever the split (each point's is its own).
+/// Points per parallel piece of the answer pass: the same answers whatever the split
+/// (each point's is its own).
 const PIECE: usize = 8192;
 
 /// `cloud` without its specks ([`specks`]), and how many points were left out; `None`
@@ -119,7 +134,11 @@ pub fn without_specks(
     cell: f64,
     max_cubes: usize,
 ) -> Option<(PointCloud, usize)> {
-    let flags = specks(&cloud.points, cell, max_cubes);
+    let cubes = speck_cubes(&cloud.points, cell, max_cubes);
+    if cubes.is_empty() {
+        return None;
+    }
+    let flags = in_cubes(&cloud.points, cell, &cubes);
     let dropped = flags.iter().filter(|&&f| f).count();
     (dropped > 0).then(|| {
         let kept = cloud
@@ -182,6 +201,27 @@ mod tests {
         pair.push(Point3::new(0.5, 0.5, 0.85));
         let flags = specks(&pair, 0.04, 2);
         assert_eq!(flags.iter().filter(|&&f| f).count(), 2);
+    }
+
+    #[test]
+    fn the_speck_cubes_are_the_cubes_of_the_specks_points() {
+        let mut pts = plane(0.45, 0.01);
+        assert!(speck_cubes(&pts, 0.04, 8).is_empty());
+        // A lone point, and a pair in two cubes side by side.
+        pts.push(Point3::new(0.55, 0.55, 0.75));
+        pts.push(Point3::new(0.21, 0.3, 0.70));
+        pts.push(Point3::new(0.25, 0.3, 0.70));
+        let cubes = speck_cubes(&pts, 0.04, 8);
+        let mut got: Vec<[i64; 3]> = cubes.iter().copied().collect();
+        got.sort_unstable();
+        assert_eq!(got, vec![[5, 7, 17], [6, 7, 17], [13, 13, 18]]);
+        let flags = in_cubes(&pts, 0.04, &cubes);
+        let n = pts.len();
+        assert!(flags[..n - 3].iter().all(|f| !f));
+        assert!(flags[n - 3..].iter().all(|&f| f));
+        // With one cube allowed, the pair is not a speck.
+        let one: Vec<[i64; 3]> = speck_cubes(&pts, 0.04, 1).into_iter().collect();
+        assert_eq!(one, vec![[13, 13, 18]]);
     }
 
     #[test]
