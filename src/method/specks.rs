@@ -17,6 +17,8 @@
 //! partition of the occupied cubes, which depends only on the set of points, so the
 //! answer does not depend on their order or on the thread count.
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use nalgebra::Point3;
 use rayon::prelude::*;
 
@@ -39,9 +41,141 @@ fn cube_of(p: &Point3<f64>, cell: f64) -> [i64; 3] {
 
 /// The occupied cubes of edge `cell` metres of `points` that lie in components of at most
 /// `max_cubes` cubes (see [`specks`]): usually none, and a few where there are specks.
+///
+/// Where the box of the occupied cubes has at most [`DENSE_CUBES_PER_POINT`] cubes a
+/// point, the cubes are marked in a dense grid over it ([`dense_speck_cubes`]), which
+/// costs no hashing per point (a scan's points, unlike a depth image's, do not come in
+/// runs of one cube); else they are hashed ([`hashed_speck_cubes`]). The components, so
+/// the answer, depend only on the set of occupied cubes.
 fn speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[i64; 3]> {
-    // The occupied cubes, numbered in the order first met. A depth image lists row
-    // neighbours side by side: a run of points in one cube is looked up once.
+    // The box of the cubes from the points' least and greatest coordinates: a cube index
+    // is monotone in its coordinate (a division by a positive `cell`, then a floor).
+    let bounds = points
+        .par_iter()
+        .with_min_len(PIECE)
+        .map(|p| (p.coords, p.coords))
+        .reduce_with(|(lo, hi), (l, h)| (lo.inf(&l), hi.sup(&h)));
+    let Some((lo, hi)) = bounds else {
+        return CellSet::default();
+    };
+    let (lo, hi) = (cube_of(&lo.into(), cell), cube_of(&hi.into(), cell));
+    let dims = [0, 1, 2].map(|a| {
+        hi[a]
+            .checked_sub(lo[a])
+            .and_then(|d| usize::try_from(d).ok())
+            .and_then(|d| d.checked_add(1))
+    });
+    let cells = dims
+        .iter()
+        .try_fold(1usize, |n, d| d.and_then(|d| n.checked_mul(d)));
+    let dense = match cells {
+        Some(n)
+            if cell > 0.0
+                && n <= points.len().saturating_mul(DENSE_CUBES_PER_POINT)
+                && u32::try_from(n).is_ok_and(|n| n < u32::MAX) =>
+        {
+            dense_speck_cubes(points, cell, max_cubes, lo, dims.map(|d| d.unwrap_or(1)))
+        }
+        _ => None,
+    };
+    // Without a box that holds every cube (non-finite coordinates), hashed.
+    dense.unwrap_or_else(|| hashed_speck_cubes(points, cell, max_cubes))
+}
+
+/// Cubes of the dense grid of [`speck_cubes`] per point of the cloud, at most: 4 (16
+/// bytes a point, less than its 24 bytes of coordinates). A depth view's or a room scan's
+/// box at 4 cm has 0.3-3.5 cubes a point; a few far strays spread it past this.
+const DENSE_CUBES_PER_POINT: usize = 4;
+
+/// [`speck_cubes`] over a dense grid of the `dims` cubes from cube `lo` on (x-major: the
+/// cube `lo + (x, y, z)` at `(x * dims[1] + y) * dims[2] + z`, fewer than `u32::MAX`
+/// cubes); `None` if some point's cube is outside it. The points mark their cubes in
+/// parallel pieces (marking twice is marking once), and the occupied cubes are numbered
+/// in grid order.
+fn dense_speck_cubes(
+    points: &[Point3<f64>],
+    cell: f64,
+    max_cubes: usize,
+    lo: [i64; 3],
+    dims: [usize; 3],
+) -> Option<CellSet<[i64; 3]>> {
+    let [_, ny, nz] = dims;
+    // The offset of cube `k` inside the box along each axis, if inside.
+    let at = |k: [i64; 3]| -> Option<[usize; 3]> {
+        let mut o = [0usize; 3];
+        for a in 0..3 {
+            o[a] = usize::try_from(k[a].checked_sub(lo[a])?).ok()?;
+            if o[a] >= dims[a] {
+                return None;
+            }
+        }
+        Some(o)
+    };
+    let index = |[x, y, z]: [usize; 3]| (x * ny + y) * nz + z;
+    // 0: empty; else the cube's number plus one once numbered (1 while only marked).
+    let mut grid: Vec<AtomicU32> = (0..dims.iter().product())
+        .map(|_| AtomicU32::new(0))
+        .collect();
+    let inside = points.par_chunks(PIECE).all(|piece| {
+        let mut last = None;
+        for p in piece {
+            let k = cube_of(p, cell);
+            if last != Some(k) {
+                let Some(o) = at(k) else {
+                    return false;
+                };
+                grid[index(o)].store(1, Ordering::Relaxed);
+                last = Some(k);
+            }
+        }
+        true
+    });
+    if !inside {
+        return None;
+    }
+    // The occupied cubes' offsets in the box, in grid order.
+    let mut cubes: Vec<[usize; 3]> = Vec::new();
+    let mut cells = grid.iter_mut();
+    for x in 0..dims[0] {
+        for y in 0..ny {
+            for (z, g) in (0..nz).zip(cells.by_ref()) {
+                let g = g.get_mut();
+                if *g != 0 {
+                    cubes.push([x, y, z]);
+                    *g = u32::try_from(cubes.len()).unwrap_or(u32::MAX);
+                }
+            }
+        }
+    }
+    let small = small_components(cubes.len(), max_cubes, |i, (dx, dy, dz)| {
+        let [x, y, z] = cubes[i];
+        let n = [
+            x.checked_add_signed(isize::try_from(dx).ok()?)?,
+            y.checked_add_signed(isize::try_from(dy).ok()?)?,
+            z.checked_add_signed(isize::try_from(dz).ok()?)?,
+        ];
+        if n.iter().zip(&dims).any(|(v, d)| v >= d) {
+            return None;
+        }
+        match grid[index(n)].load(Ordering::Relaxed) {
+            0 => None,
+            id => Some(id as usize - 1),
+        }
+    });
+    let set = cubes
+        .iter()
+        .zip(small)
+        .filter(|(_, s)| *s)
+        // Inside the box: the offsets fit `i64` (the box's span did).
+        .map(|(p, _)| [0, 1, 2].map(|a| lo[a] + i64::try_from(p[a]).unwrap_or(0)))
+        .collect();
+    Some(set)
+}
+
+/// [`speck_cubes`] with the occupied cubes in a hash map, numbered in the order first
+/// met. A depth image lists row neighbours side by side: a run of points in one cube is
+/// looked up once.
+fn hashed_speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[i64; 3]> {
     let mut ids: CellMap<[i64; 3], usize> = CellMap::default();
     let mut cubes: Vec<[i64; 3]> = Vec::new();
     let mut last: Option<[i64; 3]> = None;
@@ -55,10 +189,35 @@ fn speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[
             last = Some(k);
         }
     }
-    // Union-find over the cubes: each joined with its occupied neighbours on the 13 sides
-    // after it in (x, y, z) order, which meets every one of the 26 adjacencies once. The
-    // smaller root becomes the parent; the partition is the same in any order.
-    let mut parent: Vec<usize> = (0..cubes.len()).collect();
+    let small = small_components(cubes.len(), max_cubes, |i, (dx, dy, dz)| {
+        let k = cubes[i];
+        let n = [
+            k[0].wrapping_add(dx),
+            k[1].wrapping_add(dy),
+            k[2].wrapping_add(dz),
+        ];
+        ids.get(&n).copied()
+    });
+    cubes
+        .iter()
+        .zip(small)
+        .filter(|(_, s)| *s)
+        .map(|(k, _)| *k)
+        .collect()
+}
+
+/// For each of `n` occupied cubes, whether its 26-connected component has at most
+/// `max_cubes` cubes, where `neighbour(i, d)` is the number of the occupied cube at
+/// offset `d` from cube `i`, if any. Union-find: each cube joined with its occupied
+/// neighbours on the 13 sides after it in (x, y, z) order ([`HALF_NEIGHBOURS`]), which
+/// meets every one of the 26 adjacencies once; the smaller root becomes the parent. The
+/// partition is the same in any order.
+fn small_components(
+    n: usize,
+    max_cubes: usize,
+    neighbour: impl Fn(usize, (i64, i64, i64)) -> Option<usize>,
+) -> Vec<bool> {
+    let mut parent: Vec<usize> = (0..n).collect();
     let root = |parent: &mut [usize], mut x: usize| {
         while parent[x] != x {
             parent[x] = parent[parent[x]];
@@ -66,30 +225,20 @@ fn speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[
         }
         x
     };
-    for (i, k) in cubes.iter().enumerate() {
-        for (dx, dy, dz) in HALF_NEIGHBOURS {
-            let n = [
-                k[0].wrapping_add(dx),
-                k[1].wrapping_add(dy),
-                k[2].wrapping_add(dz),
-            ];
-            if let Some(&j) = ids.get(&n) {
+    for i in 0..n {
+        for d in HALF_NEIGHBOURS {
+            if let Some(j) = neighbour(i, d) {
                 let (a, b) = (root(&mut parent, i), root(&mut parent, j));
                 parent[a.max(b)] = a.min(b);
             }
         }
     }
-    let roots: Vec<usize> = (0..cubes.len()).map(|i| root(&mut parent, i)).collect();
-    let mut size = vec![0usize; cubes.len()];
+    let roots: Vec<usize> = (0..n).map(|i| root(&mut parent, i)).collect();
+    let mut size = vec![0usize; n];
     for &r in &roots {
         size[r] += 1;
     }
-    cubes
-        .iter()
-        .zip(&roots)
-        .filter(|(_, &r)| size[r] <= max_cubes)
-        .map(|(k, _)| *k)
-        .collect()
+    roots.iter().map(|&r| size[r] <= max_cubes).collect()
 }
 
 /// For each point of `points`, whether its cube of edge `cell` metres is one of `cubes`
@@ -222,6 +371,62 @@ mod tests {
         // With one cube allowed, the pair is not a speck.
         let one: Vec<[i64; 3]> = speck_cubes(&pts, 0.04, 1).into_iter().collect();
         assert_eq!(one, vec![[13, 13, 18]]);
+    }
+
+    #[test]
+    fn the_dense_grid_finds_the_hashed_cubes() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let sorted = |set: CellSet<[i64; 3]>| {
+            let mut v: Vec<[i64; 3]> = set.into_iter().collect();
+            v.sort_unstable();
+            v
+        };
+        let mut found = 0;
+        for round in 0..40 {
+            // Planes, rods and clumps of random sizes, shuffled (no runs), and strays,
+            // some on the box's faces and corners, some negative.
+            let mut pts = plane(rng.random_range(-0.5..0.5), 0.02);
+            for _ in 0..rng.random_range(0..30) {
+                let at = Point3::new(
+                    rng.random_range(-0.6..1.6),
+                    rng.random_range(-0.6..1.6),
+                    rng.random_range(-0.6..1.6),
+                );
+                for _ in 0..rng.random_range(1..12) {
+                    pts.push(
+                        at + Vector3::new(
+                            rng.random_range(0.0..0.08),
+                            rng.random_range(0.0..0.08),
+                            rng.random_range(0.0..0.08),
+                        ),
+                    );
+                }
+            }
+            for i in (1..pts.len()).rev() {
+                pts.swap(i, rng.random_range(0..=i));
+            }
+            let cell = [0.04, 0.05, 0.1][round % 3];
+            let max_cubes = [1, 2, 8][round % 3];
+            let keys: Vec<[i64; 3]> = pts.iter().map(|p| cube_of(p, cell)).collect();
+            let lo = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).min().unwrap());
+            let hi = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).max().unwrap());
+            let dims = [0, 1, 2].map(|a| usize::try_from(hi[a] - lo[a] + 1).unwrap());
+            let hashed = sorted(hashed_speck_cubes(&pts, cell, max_cubes));
+            let dense = sorted(dense_speck_cubes(&pts, cell, max_cubes, lo, dims).unwrap());
+            assert_eq!(dense, hashed, "round {round}");
+            assert_eq!(sorted(speck_cubes(&pts, cell, max_cubes)), hashed);
+            found += hashed.len();
+        }
+        assert!(found > 100, "{found} speck cubes");
+        // A non-finite coordinate puts a cube outside the box of the others: hashed.
+        let mut odd = plane(0.0, 0.02);
+        odd.push(Point3::new(f64::NAN, 3.0, 0.5));
+        odd.push(Point3::new(0.5, f64::INFINITY, 0.5));
+        assert_eq!(
+            sorted(speck_cubes(&odd, 0.04, 8)),
+            sorted(hashed_speck_cubes(&odd, 0.04, 8))
+        );
     }
 
     #[test]
