@@ -256,7 +256,7 @@ fn in_cubes(points: &[Point3<f64>], cell: f64, cubes: &CellSet<[i64; 3]>) -> Vec
 
 /// The 13 neighbour offsets after `(0, 0, 0)` in lexicographic order: with their
 /// opposites, the 26 cubes round a cube.
-const HALF_NEIGHBOURS: [(i64, i64, i64); 13] = [
+pub(crate) const HALF_NEIGHBOURS: [(i64, i64, i64); 13] = [
     (0, 0, 1),
     (0, 1, -1),
     (0, 1, 0),
