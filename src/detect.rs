@@ -287,16 +287,28 @@ pub fn detect_all_prepared(
     let grid = OnceLock::new();
     // Each model's segmentation (serial) runs beside the next model's search: each reads
     // only the prepared scene, the cloud and the cells, so each gives the same whatever
-    // runs beside it, and the outcomes are kept in the models' order.
+    // runs beside it, and the outcomes are kept in the models' order. A model without
+    // detections has nothing to grow: its outcome (every label `None`) is made right
+    // after its search, still beside the segmentation before it.
     let mut outcomes = Vec::with_capacity(models.len());
     let mut last: Option<Found> = None;
     for m in models {
         let (found, done) = rayon::join(
-            || find(cloud, prepared, &m.agent, &m.hierarchy, cfg, &grid),
+            || {
+                let f = find(cloud, prepared, &m.agent, &m.hierarchy, cfg, &grid);
+                if f.detections.is_empty() {
+                    Err(label(cloud, f, cfg, &grid))
+                } else {
+                    Ok(f)
+                }
+            },
             || last.take().map(|f| label(cloud, f, cfg, &grid)),
         );
         outcomes.extend(done);
-        last = Some(found);
+        match found {
+            Ok(f) => last = Some(f),
+            Err(labelled) => outcomes.push(labelled),
+        }
     }
     outcomes.extend(last.map(|f| label(cloud, f, cfg, &grid)));
     outcomes
