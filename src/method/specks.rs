@@ -19,7 +19,7 @@
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
 use crate::cellhash::{CellMap, CellSet};
@@ -42,22 +42,40 @@ fn cube_of(p: &Point3<f64>, cell: f64) -> [i64; 3] {
 /// The occupied cubes of edge `cell` metres of `points` that lie in components of at most
 /// `max_cubes` cubes (see [`specks`]): usually none, and a few where there are specks.
 ///
-/// Where the box of the occupied cubes has at most [`DENSE_CUBES_PER_POINT`] cubes a
-/// point, the cubes are marked in a dense grid over it ([`dense_speck_cubes`]), which
-/// costs no hashing per point (a scan's points, unlike a depth image's, do not come in
-/// runs of one cube); else they are hashed ([`hashed_speck_cubes`]). The components, so
-/// the answer, depend only on the set of occupied cubes.
+/// Where at least half the points start a run of points in one cube (a scan's points,
+/// unlike a depth image's rows, do not come in runs) and the box of the occupied cubes
+/// has at most [`DENSE_CUBES_PER_POINT`] cubes a point, the cubes are marked in a dense
+/// grid over it ([`dense_speck_cubes`]), which costs no hashing per point; else they are
+/// hashed, a run at a time ([`hashed_speck_cubes`]). The components, so the answer,
+/// depend only on the set of occupied cubes.
 fn speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[i64; 3]> {
     // The box of the cubes from the points' least and greatest coordinates: a cube index
-    // is monotone in its coordinate (a division by a positive `cell`, then a floor).
+    // is monotone in its coordinate (a division by a positive `cell`, then a floor). And
+    // how many points lie over a cube's edge from the one before (within a piece): then
+    // they are in another cube, so this many at least start a run of points in one cube.
     let bounds = points
-        .par_iter()
-        .with_min_len(PIECE)
-        .map(|p| (p.coords, p.coords))
-        .reduce_with(|(lo, hi), (l, h)| (lo.inf(&l), hi.sup(&h)));
-    let Some((lo, hi)) = bounds else {
+        .par_chunks(PIECE)
+        .map(|piece| {
+            let first = piece.first().map_or(Vector3::zeros(), |p| p.coords);
+            let mut prev = first;
+            let (mut lo, mut hi, mut jumps) = (first, first, 0usize);
+            for p in piece {
+                lo = lo.inf(&p.coords);
+                hi = hi.sup(&p.coords);
+                jumps += usize::from((p.coords - prev).amax() > cell);
+                prev = p.coords;
+            }
+            (lo, hi, jumps)
+        })
+        .reduce_with(|(lo, hi, j), (l, h, k)| (lo.inf(&l), hi.sup(&h), j + k));
+    let Some((lo, hi, jumps)) = bounds else {
         return CellSet::default();
     };
+    // Points in long runs (a depth image's rows) hash one cube a run, fewer than a dense
+    // grid costs to fill and read; points mostly not in runs (a scan) go to the grid.
+    if jumps.saturating_mul(2) < points.len() {
+        return hashed_speck_cubes(points, cell, max_cubes);
+    }
     let (lo, hi) = (cube_of(&lo.into(), cell), cube_of(&hi.into(), cell));
     let dims = [0, 1, 2].map(|a| {
         hi[a]
@@ -419,6 +437,17 @@ mod tests {
             found += hashed.len();
         }
         assert!(found > 100, "{found} speck cubes");
+        // Shuffled (no runs) in a small box, with two strays: `speck_cubes` takes the
+        // dense grid, with the hashed answer.
+        let mut shuffled = plane(0.0, 0.01);
+        shuffled.push(Point3::new(0.5, 0.5, 0.6));
+        shuffled.push(Point3::new(0.9, 0.1, 0.3));
+        for i in (1..shuffled.len()).rev() {
+            shuffled.swap(i, rng.random_range(0..=i));
+        }
+        let want = sorted(hashed_speck_cubes(&shuffled, 0.1, 1));
+        assert_eq!(want, vec![[5, 5, 5], [9, 1, 2]]);
+        assert_eq!(sorted(speck_cubes(&shuffled, 0.1, 1)), want);
         // A non-finite coordinate puts a cube outside the box of the others: hashed.
         let mut odd = plane(0.0, 0.02);
         odd.push(Point3::new(f64::NAN, 3.0, 0.5));
