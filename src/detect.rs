@@ -283,12 +283,35 @@ pub fn detect_all_prepared(
     cfg: &DetectConfig,
 ) -> Vec<Outcome> {
     // The segmentation's cells depend on the cloud and `cfg.segment` only: built once,
-    // when the first model with a detection needs them.
+    // beside the first search with hypotheses to try.
     let grid = OnceLock::new();
-    models
-        .iter()
-        .map(|m| detect_prepared_in(cloud, prepared, &m.agent, &m.hierarchy, cfg, &grid))
-        .collect()
+    // Each model's segmentation (serial) runs beside the next model's search: each reads
+    // only the prepared scene, the cloud and the cells, so each gives the same whatever
+    // runs beside it, and the outcomes are kept in the models' order. A model without
+    // detections has nothing to grow: its outcome (every label `None`) is made right
+    // after its search, still beside the segmentation before it.
+    let mut outcomes = Vec::with_capacity(models.len());
+    let mut last: Option<Found> = None;
+    for m in models {
+        let (found, done) = rayon::join(
+            || {
+                let f = find(cloud, prepared, &m.agent, &m.hierarchy, cfg, &grid);
+                if f.detections.is_empty() {
+                    Err(label(cloud, f, cfg, &grid))
+                } else {
+                    Ok(f)
+                }
+            },
+            || last.take().map(|f| label(cloud, f, cfg, &grid)),
+        );
+        outcomes.extend(done);
+        match found {
+            Ok(f) => last = Some(f),
+            Err(labelled) => outcomes.push(labelled),
+        }
+    }
+    outcomes.extend(last.map(|f| label(cloud, f, cfg, &grid)));
+    outcomes
 }
 
 /// Runs the method on a prepared scene (shared between hierarchies and bodies).
@@ -299,24 +322,51 @@ pub fn detect_prepared(
     h: &Hierarchy,
     cfg: &DetectConfig,
 ) -> Outcome {
-    detect_prepared_in(cloud, prepared, agent, h, cfg, &OnceLock::new())
+    let grid = OnceLock::new();
+    label(
+        cloud,
+        find(cloud, prepared, agent, h, cfg, &grid),
+        cfg,
+        &grid,
+    )
 }
 
-/// [`detect_prepared`], segmenting over the cells in `grid` (built from `cloud` and
-/// `cfg.segment` if not yet there, and only if some detection needs it).
-fn detect_prepared_in(
+/// One model's detections on a prepared scene, strongest first, before segmentation
+/// (`segment_points` 0), with the counts of its stages.
+struct Found {
+    /// The detections after suppression.
+    detections: Vec<Detection>,
+    /// Counts of the stages.
+    stats: Stats,
+}
+
+/// The search of [`detect_prepared`]: hypotheses, fits, unfolding, selection. The
+/// cells in `grid` are built beside the search when there are hypotheses to try.
+fn find(
     cloud: &PointCloud,
     prepared: &Prepared,
     agent: &Agent,
     h: &Hierarchy,
     cfg: &DetectConfig,
     grid: &OnceLock<SegmentGrid>,
-) -> Outcome {
+) -> Found {
     let hyps = hypotheses(&prepared.map, &h.hypothesis, h.orientation, agent.height);
-    let results: Vec<(Option<Unfolded>, usize)> = hyps
-        .par_iter()
-        .map(|hyp| best_at(agent, h, &prepared.scene, hyp, cfg))
-        .collect();
+    let search = || -> Vec<(Option<Unfolded>, usize)> {
+        hyps.par_iter()
+            .map(|hyp| best_at(agent, h, &prepared.scene, hyp, cfg))
+            .collect()
+    };
+    // With hypotheses to try, a detection (and so the segmentation's cells) is likely:
+    // the cells are built beside the search rather than after it. They depend on `cloud`
+    // and `cfg.segment` only, so they are the same whenever they are built.
+    let results = if hyps.is_empty() {
+        Vec::new()
+    } else {
+        rayon::join(search, || {
+            grid.get_or_init(|| SegmentGrid::new(cloud, &cfg.segment));
+        })
+        .0
+    };
     let fits = results.iter().map(|r| r.1).sum();
     let candidates: Vec<(usize, Unfolded)> = results
         .into_iter()
@@ -336,13 +386,38 @@ fn detect_prepared_in(
         .map(|(_, u)| u.placement.position)
         .collect();
     let kept = suppress(&centres, &order, h.suppression_radius * agent.height);
-    let mut detections: Vec<Detection> = kept
+    let detections: Vec<Detection> = kept
         .iter()
         .map(|&k| {
             let (hi, u) = &candidates[k];
             to_detection(agent, h, &hyps[*hi], u)
         })
         .collect();
+    Found {
+        detections,
+        stats: Stats {
+            points: cloud.len(),
+            voxels: prepared.scene.voxel_count(),
+            hypotheses: hyps.len(),
+            fits,
+            candidates: candidates.len(),
+        },
+    }
+}
+
+/// The segmentation of [`detect_prepared`]: the points of `cloud` grown from each
+/// detection of `found` in turn (over the cells in `grid`, built if not yet there), and
+/// each detection's count of them.
+fn label(
+    cloud: &PointCloud,
+    found: Found,
+    cfg: &DetectConfig,
+    grid: &OnceLock<SegmentGrid>,
+) -> Outcome {
+    let Found {
+        mut detections,
+        stats,
+    } = found;
     let seeds: Vec<Point3<f64>> = detections.iter().map(|d| d.seat).collect();
     let labels = if seeds.is_empty() {
         vec![None; cloud.len()]
@@ -356,13 +431,7 @@ fn detect_prepared_in(
     Outcome {
         detections,
         labels,
-        stats: Stats {
-            points: cloud.len(),
-            voxels: prepared.scene.voxel_count(),
-            hypotheses: hyps.len(),
-            fits,
-            candidates: candidates.len(),
-        },
+        stats,
     }
 }
 
@@ -414,5 +483,40 @@ fn to_detection(agent: &Agent, h: &Hierarchy, hyp: &Hypothesis, u: &Unfolded) ->
             .zip(&frames)
             .map(|(j, f)| (j.name.clone(), Point3::from(f.translation.vector)))
             .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::set::ModelChoice;
+
+    #[test]
+    fn every_model_at_once_gives_each_model_alone_whatever_the_threads() {
+        // Two bodies with both hierarchies: four models, the segmentation of each beside
+        // the search of the next.
+        let models = ModelChoice {
+            heights: vec![1.65, 1.85],
+            ..Default::default()
+        }
+        .load()
+        .unwrap();
+        assert_eq!(models.len(), 4);
+        let cloud = PointCloud::new(crate::embed::tests::stool());
+        let cfg = DetectConfig::default();
+        let alone: Vec<Outcome> = models
+            .iter()
+            .map(|m| detect(&cloud, &m.agent, &m.hierarchy, &cfg))
+            .collect();
+        let found = alone.iter().filter(|o| !o.detections.is_empty()).count();
+        assert!(found >= 2, "{found} models detect");
+        for threads in [1, 2] {
+            let all = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| detect_all(&cloud, &models, &cfg));
+            assert_eq!(all, alone, "{threads} threads");
+        }
     }
 }

@@ -129,12 +129,12 @@ fn detect_in(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::model::set::ModelChoice;
 
     /// A seat-height box top (0.45 m) on a floor, 1 cm apart: something to sit on.
-    fn stool() -> Vec<Point3<f64>> {
+    pub(crate) fn stool() -> Vec<Point3<f64>> {
         let mut pts = Vec::new();
         for i in 0..200 {
             for j in 0..200 {

@@ -60,13 +60,21 @@ impl FileReport {
         outcomes: Vec<Outcome>,
     ) -> FileReport {
         let mut detections = Vec::new();
-        let mut labels: Vec<Option<usize>> = vec![None; points];
+        // `None` until the first outcome: every label `None`, one per point.
+        let mut labels: Option<Vec<Option<usize>>> = None;
         let mut runs = Vec::new();
         for (m, o) in models.iter().zip(outcomes) {
             let offset = detections.len();
-            for (l, ol) in labels.iter_mut().zip(&o.labels) {
-                if l.is_none() {
-                    *l = ol.map(|i| i + offset);
+            if labels.is_none() && o.labels.len() == points {
+                // The first outcome's labels, one per point, are the merged ones as they
+                // stand (no detection before it, so no offset): kept, not copied.
+                labels = Some(o.labels);
+            } else {
+                let merged = labels.get_or_insert_with(|| vec![None; points]);
+                for (l, ol) in merged.iter_mut().zip(&o.labels) {
+                    if l.is_none() {
+                        *l = ol.map(|i| i + offset);
+                    }
                 }
             }
             runs.push(RunStats {
@@ -83,7 +91,7 @@ impl FileReport {
             ids: crate::model::set::ids(models),
             runs,
             detections,
-            labels,
+            labels: labels.unwrap_or_else(|| vec![None; points]),
         }
     }
 
@@ -393,4 +401,66 @@ pub fn to_table(r: &FileReport) -> String {
         ));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::set::ModelChoice;
+    use nalgebra::Point3;
+
+    /// A detection with every field empty or zero (only its place in the list matters).
+    fn blank() -> Detection {
+        Detection {
+            hierarchy: String::new(),
+            agent: String::new(),
+            height: 0.0,
+            position: Point3::origin(),
+            yaw: 0.0,
+            seat: Point3::origin(),
+            affordances: Vec::new(),
+            local_scores: Vec::new(),
+            pose: Vec::new(),
+            score: 0.0,
+            stability: 0.0,
+            availability: 0.0,
+            segment_points: 0,
+            parts: Vec::new(),
+            joints: Vec::new(),
+        }
+    }
+
+    fn outcome(detections: usize, labels: Vec<Option<usize>>) -> Outcome {
+        Outcome {
+            detections: vec![blank(); detections],
+            labels,
+            stats: Stats::default(),
+        }
+    }
+
+    #[test]
+    fn labels_merge_first_run_first_and_number_the_detections_run_after_run() {
+        let models = ModelChoice::default().load().unwrap();
+        assert_eq!(models.len(), 2);
+        let first = vec![Some(0), None, None, Some(0)];
+        let second = vec![Some(1), Some(0), None, Some(1)];
+        let merged = |points: usize, first: Vec<Option<usize>>| {
+            let outcomes = vec![outcome(1, first), outcome(2, second.clone())];
+            FileReport::new("f".into(), points, 0, &models, outcomes).labels
+        };
+        // The first run's labels as they are; the second's numbered after its one
+        // detection, where the first left a point unlabelled.
+        assert_eq!(
+            merged(4, first.clone()),
+            vec![Some(0), Some(1), None, Some(0)]
+        );
+        // Labels shorter than the cloud: the rest unlabelled.
+        assert_eq!(
+            merged(5, first.clone()),
+            vec![Some(0), Some(1), None, Some(0), None]
+        );
+        assert_eq!(merged(3, first), vec![Some(0), Some(1), None]);
+        let none = FileReport::new("f".into(), 3, 0, &models, Vec::new());
+        assert_eq!(none.labels, vec![None; 3]);
+    }
 }

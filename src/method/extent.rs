@@ -25,6 +25,7 @@ use rayon::prelude::*;
 use crate::cellhash::{key_runs, CellMap};
 use crate::cloud::PointCloud;
 use crate::detect::DetectConfig;
+use crate::method::specks::HALF_NEIGHBOURS;
 use crate::num::floor_i64;
 
 /// Limits of the guard stage. Defaults carry their reasons.
@@ -203,7 +204,160 @@ pub fn grid_bytes(extent: [f64; 3], cfg: &DetectConfig, reach: f64) -> f64 {
 
 /// Per point, whether it lies in a connected region of coarse cubes (edge `cell`, touching
 /// by face, edge or corner) that holds at least `share` of the points, or in the largest.
+///
+/// Where the box of the occupied cubes has at most [`DENSE_BULK_CUBES`] cubes and no more
+/// than the points ([`dense_bulk`]: each point's cube an index into the box, no hashing
+/// and no list of runs, which a scan whose points do not come in runs makes as long as
+/// the cloud), else by the runs of points in one cube ([`hashed_bulk`]). The regions and
+/// their counts depend only on the points' cubes, so both give the same answer.
 fn bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
+    dense_bulk(points, cell, share).unwrap_or_else(|| hashed_bulk(points, cell, share))
+}
+
+/// Most cubes in the box of [`dense_bulk`]: 65 536 (a 40 m cube at 1 m, counted in
+/// parallel pieces of 512 KiB each); a far stray spreads the box past it, and the cubes
+/// are then hashed.
+const DENSE_BULK_CUBES: usize = 1 << 16;
+
+/// Points per piece of [`dense_bulk`]'s passes: each piece counts into its own array of
+/// the box's cubes, so a piece is many times the largest box. The counts do not depend
+/// on it.
+const BULK_PIECE: usize = 64 * 1024;
+
+/// [`bulk`] over the box of the points' cubes, or `None` where the box is larger than
+/// [`DENSE_BULK_CUBES`] or than the number of points (or the coordinates are not finite):
+/// each point's cube as an index into the box (x-major), the points per cube counted in
+/// parallel pieces and summed, the occupied cubes joined through the box.
+fn dense_bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Option<Vec<bool>> {
+    let cube = |p: &Point3<f64>| p.coords.map(|c| floor_i64(c / cell));
+    // A cube index is monotone in its coordinate (a division by a positive `cell`, then a
+    // floor): the box from the least and greatest coordinates.
+    let (lo, hi) = points
+        .par_iter()
+        .with_min_len(BULK_PIECE)
+        .map(|p| (p.coords, p.coords))
+        .reduce_with(|(lo, hi), (l, h)| (lo.inf(&l), hi.sup(&h)))?;
+    if !(cell > 0.0 && lo.iter().chain(hi.iter()).all(|c| c.is_finite())) {
+        return None;
+    }
+    let (lo, hi) = (
+        lo.map(|c| floor_i64(c / cell)),
+        hi.map(|c| floor_i64(c / cell)),
+    );
+    let mut dims = [0usize; 3];
+    for a in 0..3 {
+        dims[a] = usize::try_from(hi[a].checked_sub(lo[a])?)
+            .ok()?
+            .checked_add(1)?;
+    }
+    let cells = dims
+        .iter()
+        .try_fold(1usize, |n, &d| n.checked_mul(d))
+        .filter(|&n| n <= DENSE_BULK_CUBES && n <= points.len())?;
+    let [_, ny, nz] = dims;
+    // Inside the box by the monotony above; `None` (then hashed) were it not.
+    let index = |p: &Point3<f64>| -> Option<usize> {
+        let k = cube(p);
+        let mut o = [0usize; 3];
+        for a in 0..3 {
+            o[a] = usize::try_from(k[a].checked_sub(lo[a])?).ok()?;
+            if o[a] >= dims[a] {
+                return None;
+            }
+        }
+        Some((o[0] * ny + o[1]) * nz + o[2])
+    };
+    let of_point: Vec<u32> = points
+        .par_iter()
+        .with_min_len(BULK_PIECE)
+        .map(|p| {
+            index(p)
+                .and_then(|c| u32::try_from(c).ok())
+                .unwrap_or(u32::MAX)
+        })
+        .collect();
+    let count: Vec<usize> = of_point
+        .par_chunks(BULK_PIECE)
+        .map(|piece| {
+            let mut n = vec![0usize; cells];
+            for &c in piece {
+                if let Some(n) = n.get_mut(c as usize) {
+                    *n += 1;
+                }
+            }
+            n
+        })
+        .reduce_with(|mut a, b| {
+            for (a, b) in a.iter_mut().zip(b) {
+                *a += b;
+            }
+            a
+        })?;
+    if count.iter().sum::<usize>() != points.len() {
+        return None;
+    }
+    // Union-find over the occupied cubes, each joined with its occupied neighbours on the
+    // 13 sides after it (which meets every one of the 26 adjacencies once).
+    let mut parent: Vec<usize> = (0..cells).collect();
+    for x in 0..dims[0] {
+        for y in 0..ny {
+            for z in 0..nz {
+                let i = (x * ny + y) * nz + z;
+                if count[i] == 0 {
+                    continue;
+                }
+                for (dx, dy, dz) in HALF_NEIGHBOURS {
+                    let step = |v: usize, d: i64, n: usize| {
+                        v.checked_add_signed(isize::try_from(d).ok()?)
+                            .filter(|&w| w < n)
+                    };
+                    let (Some(u), Some(v), Some(w)) =
+                        (step(x, dx, dims[0]), step(y, dy, ny), step(z, dz, nz))
+                    else {
+                        continue;
+                    };
+                    let j = (u * ny + v) * nz + w;
+                    if count[j] != 0 {
+                        let (a, b) = (root(&mut parent, i), root(&mut parent, j));
+                        parent[a.max(b)] = a.min(b);
+                    }
+                }
+            }
+        }
+    }
+    let mut region = vec![0usize; cells];
+    for (i, &n) in count.iter().enumerate() {
+        let r = root(&mut parent, i);
+        region[r] += n;
+    }
+    let largest = region.iter().copied().max().unwrap_or(0);
+    let least = share * points.len() as f64;
+    let kept: Vec<bool> = (0..cells)
+        .map(|i| {
+            let n = region[root(&mut parent, i)];
+            n == largest || n as f64 >= least
+        })
+        .collect();
+    Some(
+        of_point
+            .par_iter()
+            .with_min_len(BULK_PIECE)
+            .map(|&c| kept[c as usize])
+            .collect(),
+    )
+}
+
+/// The root of `i` in the union-find `parent`, halving the path on the way.
+fn root(parent: &mut [usize], mut i: usize) -> usize {
+    while parent[i] != i {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    i
+}
+
+/// [`bulk`] by the runs of points in one cube, the cubes hashed.
+fn hashed_bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
     // The cubes of runs of points in one cube (as a depth image's rows give), found in
     // parallel pieces: each cube is looked up once per run, as one loop over the points
     // that remembers the last cube does.
@@ -226,13 +380,6 @@ fn bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
         .collect();
     // Union-find over the occupied cells.
     let mut parent: Vec<usize> = (0..keys.len()).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
     for (i, k) in keys.iter().enumerate() {
         for d in 0..27i64 {
             let o = [d % 3 - 1, d / 3 % 3 - 1, d / 9 - 1];
@@ -369,7 +516,22 @@ mod tests {
                 want,
                 "{threads} threads"
             );
+            // Both ways: the box (260 x 41 x 3 cubes) is under the points and the limit.
+            let dense = on_threads(threads, || dense_bulk(&pts, 1.0, 0.01));
+            assert_eq!(dense.as_ref(), Some(&want), "{threads} threads");
+            assert_eq!(on_threads(threads, || hashed_bulk(&pts, 1.0, 0.01)), want);
         }
+        // Shuffled (no runs), by a fixed permutation: the same answer for each point.
+        let order: Vec<usize> = (0..pts.len()).map(|i| i * 7919 % pts.len()).collect();
+        let shuffled: Vec<Point3<f64>> = order.iter().map(|&i| pts[i]).collect();
+        let moved: Vec<bool> = order.iter().map(|&i| want[i]).collect();
+        assert_eq!(bulk_one_by_one(&shuffled, 1.0, 0.01), moved);
+        assert_eq!(on_threads(2, || bulk(&shuffled, 1.0, 0.01)), moved);
+        // A stray 100 km off spreads the box past the limit: hashed, the same answer.
+        let mut far = pts.clone();
+        far.push(Point3::new(1e5, 0.0, 0.0));
+        assert!(dense_bulk(&far, 1.0, 0.01).is_none());
+        assert_eq!(bulk(&far, 1.0, 0.01), bulk_one_by_one(&far, 1.0, 0.01));
     }
 
     /// The point refused is the first one in the cloud's order with a coordinate out of

@@ -410,8 +410,7 @@ impl HeightMap {
             for (k, h) in hs.iter_mut().enumerate() {
                 let c = c0 + k;
                 let column = &mut column_zs[start[c] - base..start[c + 1] - base];
-                column.sort_unstable_by(f64::total_cmp);
-                *h = stack_top(column, cfg);
+                *h = column_top(column, cfg);
             }
         });
         map
@@ -585,6 +584,32 @@ fn reaches(
             }
         });
     out
+}
+
+/// [`stack_top`] of the heights `column` in any order. A column whose heights span less
+/// than both gaps (every seat-only or floor-only column) has no gap between sorted
+/// neighbours that reaches either (each is at most the span, and the rounded difference
+/// of two heights is monotone in them), so its stack is the whole column: its top is the
+/// highest height (by `total_cmp`, the last one sorting gives) without sorting. Other
+/// columns are sorted (`total_cmp`) and walked.
+fn column_top(column: &mut [f64], cfg: &HeightMapConfig) -> Option<f64> {
+    let (&first, rest) = column.split_first()?;
+    let (mut lo, mut hi) = (first, first);
+    for &z in rest {
+        if z.total_cmp(&lo).is_lt() {
+            lo = z;
+        }
+        if z.total_cmp(&hi).is_gt() {
+            hi = z;
+        }
+    }
+    let span = hi - lo;
+    if span < cfg.overhang_gap && span < cfg.thigh_gap {
+        // `stack_top`'s test of the lowest height (the gaps are not NaN here).
+        return (lo < cfg.overhang_gap).then_some(hi);
+    }
+    column.sort_unstable_by(f64::total_cmp);
+    stack_top(column, cfg)
 }
 
 /// The top of the lowest stack of the sorted heights `column` standing on the floor
@@ -847,6 +872,59 @@ mod tests {
                 stack_top(c, cfg)
             })
             .collect()
+    }
+
+    /// `column_top` against sorting and `stack_top`, bit for bit, on seeded columns: short
+    /// and long, spans round both gaps, a seat over the floor, signed zeros, and gaps set
+    /// so that a column's span equals one exactly.
+    #[test]
+    fn column_tops_without_sorting_are_the_sorted_ones() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let base = HeightMapConfig::default();
+        let (mut quick, mut sorted) = (0, 0);
+        for round in 0..4000 {
+            let n = rng.random_range(1..60);
+            let z0: f64 = [0.0, -0.0, 0.02, 0.4, 0.9][rng.random_range(0..5)];
+            let spread: f64 = [0.0, 0.01, 0.1, 0.149, 0.15, 0.3, 1.0][rng.random_range(0..7)];
+            let mut column: Vec<f64> = (0..n)
+                .map(|_| match rng.random_range(0..6) {
+                    0 => z0,
+                    1 => -z0,
+                    _ => z0 + rng.random_range(0.0..=1.0) * spread,
+                })
+                .collect();
+            let mut cfg = base;
+            if round % 5 == 0 {
+                // A gap exactly the column's span: sorted, as the span is not under it.
+                let (lo, hi) = column
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &z| {
+                        (l.min(z), h.max(z))
+                    });
+                cfg.thigh_gap = hi - lo;
+            }
+            let mut reference = column.clone();
+            reference.sort_unstable_by(f64::total_cmp);
+            let want = stack_top(&reference, &cfg);
+            let got = column_top(&mut column, &cfg);
+            assert_eq!(
+                got.map(f64::to_bits),
+                want.map(f64::to_bits),
+                "{reference:?}"
+            );
+            let span = reference[n - 1] - reference[0];
+            if span < cfg.thigh_gap && span < cfg.overhang_gap {
+                quick += 1;
+            } else {
+                sorted += 1;
+            }
+        }
+        assert!(
+            quick > 1000 && sorted > 1000,
+            "{quick} quick, {sorted} sorted"
+        );
+        assert_eq!(column_top(&mut [], &base), None);
     }
 
     /// The tiled map against [`dense_reference`], bit for bit in every cell, on seeded

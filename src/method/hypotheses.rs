@@ -7,6 +7,7 @@ use crate::method::fuzzy::{rule, Trapezoid};
 use crate::method::heightmap::{Cells, HeightMap};
 use crate::model::hierarchy::{HypothesisRule, Orientation};
 use crate::num::{to_isize, to_usize};
+use rayon::prelude::*;
 
 /// A promising position for the agent.
 #[derive(Debug, Clone, PartialEq)]
@@ -41,6 +42,20 @@ pub fn hypotheses(
     orientation: Orientation,
     body_height: f64,
 ) -> Vec<Hypothesis> {
+    hypotheses_in_pieces(map, rule_, orientation, body_height, BAND_ROWS)
+}
+
+/// [`hypotheses`], the rows rated in pieces of about `piece_rows` map rows side by side
+/// (at least one row a piece), each piece with a band of its own, and the hypotheses
+/// kept in row order: the same whatever the pieces (a cell's rating reads the map's
+/// heights, whichever band holds them).
+fn hypotheses_in_pieces(
+    map: &HeightMap,
+    rule_: &HypothesisRule,
+    orientation: Orientation,
+    body_height: f64,
+    piece_rows: usize,
+) -> Vec<Hypothesis> {
     let template = map.disc(rule_.template_diameter * body_height / 2.0);
     let neighbourhood = map.disc(rule_.gradient_radius * body_height);
     let surface_rule = rule_
@@ -64,9 +79,8 @@ pub fn hypotheses(
         .map(|&(_, dy)| dy.unsigned_abs())
         .max()
         .unwrap_or(0);
-    let mut band = Band::default();
-    let mut out = Vec::new();
-    for iy in (0..map.ny).step_by(step) {
+    // The hypotheses of row `iy`, rated from `band`, into `out`.
+    let row = |band: &mut Band, iy: usize, out: &mut Vec<Hypothesis>| {
         if !band.holds(iy, reach) {
             band.fill(map, iy, reach);
         }
@@ -76,7 +90,7 @@ pub fn hypotheses(
                 mean,
                 top,
                 memberships,
-            }) = rate(&band, ix, iy, &template, height.as_ref(), rule_)
+            }) = rate(&*band, ix, iy, &template, height.as_ref(), rule_)
             else {
                 continue;
             };
@@ -99,13 +113,13 @@ pub fn hypotheses(
             // Where the gradient is flat, the direction across the surface's long axis
             // stands in for the descent (both point across a bed or a bench).
             let across =
-                descent(&band, ix, iy, &neighbourhood, rule_.flat_gradient).or_else(|| {
+                descent(&*band, ix, iy, &neighbourhood, rule_.flat_gradient).or_else(|| {
                     shape
                         .and_then(|(sr, shape)| shape.along(sr.elongation))
                         .map(|along| along + std::f64::consts::FRAC_PI_2)
                 });
             let facing =
-                away_from_highest(&band, ix, iy, &neighbourhood, mean, facing_tolerance).map(turn);
+                away_from_highest(&*band, ix, iy, &neighbourhood, mean, facing_tolerance).map(turn);
             // A descent that climbs towards the tallest top was turned round by a larger,
             // lower surface beyond the seat (the table a chair is pushed in at).
             let heading = match (across.map(turn), facing) {
@@ -123,12 +137,26 @@ pub fn hypotheses(
                 memberships,
             });
         }
-    }
-    out
+    };
+    let rows: Vec<usize> = (0..map.ny).step_by(step).collect();
+    let pieces: Vec<Vec<Hypothesis>> = rows
+        .par_chunks((piece_rows / step).max(1))
+        .map(|piece| {
+            let mut band = Band::default();
+            let mut out = Vec::new();
+            for &iy in piece {
+                row(&mut band, iy, &mut out);
+            }
+            out
+        })
+        .collect();
+    pieces.concat()
 }
 
 /// Rows of a band of the map whose cells are rated from one copy: 64 rows and the 2 x 8
-/// rows their neighbourhoods read (0.44 m at 5 cm) copy each row 1.25 times.
+/// rows their neighbourhoods read (0.44 m at 5 cm) copy each row 1.25 times. Also the
+/// rows of a piece rated on its own ([`hypotheses`]): a 3.2 m piece at 5 cm, so a room
+/// view's map gives a few pieces to share out.
 const BAND_ROWS: usize = 64;
 
 /// [`BAND_ROWS`] rows of the height map and `reach` rows on either side, copied into one
@@ -598,6 +626,34 @@ mod tests {
             .collect();
         assert_eq!(some.len(), even.len());
         assert!(!some.is_empty() && some.len() < all.len());
+    }
+
+    #[test]
+    fn pieces_of_rows_give_the_hypotheses_of_one_pass() {
+        // Seats of several heights and a slope over 150 rows: hypotheses in many rows.
+        let m = map_of(150, |x, y| {
+            Some(match (x / 30 + y / 25) % 4 {
+                0 => 0.45,
+                1 => 0.0,
+                2 => 0.3 + 0.002 * (x % 30) as f64,
+                _ => 0.55,
+            })
+        });
+        for spacing in [None, Some(0.1), Some(0.15)] {
+            let rule = HypothesisRule { spacing, ..rule_() };
+            let one = hypotheses_in_pieces(&m, &rule, Orientation::Parallel, 1.0, usize::MAX);
+            assert!(one.len() > 50, "{} hypotheses", one.len());
+            let rows: std::collections::BTreeSet<usize> = one.iter().map(|h| h.cell.1).collect();
+            assert!(rows.len() > 20, "{} rows", rows.len());
+            for (piece, threads) in [(1, 2), (7, 2), (64, 3), (64, 1)] {
+                let got = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| hypotheses_in_pieces(&m, &rule, Orientation::Parallel, 1.0, piece));
+                assert_eq!(got, one, "pieces of {piece} rows, {threads} threads");
+            }
+        }
     }
 
     #[test]

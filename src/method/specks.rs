@@ -17,10 +17,12 @@
 //! partition of the occupied cubes, which depends only on the set of points, so the
 //! answer does not depend on their order or on the thread count.
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use nalgebra::Point3;
 use rayon::prelude::*;
 
-use crate::cellhash::CellMap;
+use crate::cellhash::{CellMap, CellSet};
 use crate::cloud::PointCloud;
 use crate::num::floor_i64;
 
@@ -29,35 +31,211 @@ use crate::num::floor_i64;
 /// documentation). Cube indices saturate at `i64`'s range (the guard refuses coordinates
 /// that far out before this stage runs).
 pub fn specks(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> Vec<bool> {
-    let keys: Vec<[i64; 3]> = points
+    in_cubes(points, cell, &speck_cubes(points, cell, max_cubes))
+}
+
+/// The cube of edge `cell` metres holding `p`, as cube indices along x, y and z.
+fn cube_of(p: &Point3<f64>, cell: f64) -> [i64; 3] {
+    [p.x, p.y, p.z].map(|c| floor_i64(c / cell))
+}
+
+/// The occupied cubes of edge `cell` metres of `points` that lie in components of at most
+/// `max_cubes` cubes (see [`specks`]): usually none, and a few where there are specks.
+///
+/// Where at least half the points (of a sample) start a run of points in one cube (a
+/// scan's points, unlike a depth image's rows, do not come in runs) and the box of the occupied cubes
+/// has at most [`DENSE_CUBES_PER_POINT`] cubes a point, the cubes are marked in a dense
+/// grid over it ([`dense_speck_cubes`]), which costs no hashing per point; else they are
+/// hashed, a run at a time ([`hashed_speck_cubes`]). The components, so the answer,
+/// depend only on the set of occupied cubes.
+fn speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[i64; 3]> {
+    // Points in long runs (a depth image's rows) hash one cube a run, fewer than a dense
+    // grid costs to fill and read; points mostly not in runs (a scan) go to the grid. A
+    // point over a cube's edge from the one before is in another cube: counted on a
+    // sample of the pairs of consecutive points.
+    let (pairs, jumps) = (0..points.len().saturating_sub(1))
+        .step_by(RUN_SAMPLE)
+        .fold((0usize, 0usize), |(n, j), i| {
+            let jump = (points[i + 1].coords - points[i].coords).amax() > cell;
+            (n + 1, j + usize::from(jump))
+        });
+    if jumps.saturating_mul(2) < pairs {
+        return hashed_speck_cubes(points, cell, max_cubes);
+    }
+    // The box of the cubes from the points' least and greatest coordinates: a cube index
+    // is monotone in its coordinate (a division by a positive `cell`, then a floor).
+    let bounds = points
         .par_iter()
         .with_min_len(PIECE)
-        .map(|p| [p.x, p.y, p.z].map(|c| floor_i64(c / cell)))
+        .map(|p| (p.coords, p.coords))
+        .reduce_with(|(lo, hi), (l, h)| (lo.inf(&l), hi.sup(&h)));
+    let Some((lo, hi)) = bounds else {
+        return CellSet::default();
+    };
+    let (lo, hi) = (cube_of(&lo.into(), cell), cube_of(&hi.into(), cell));
+    let dims = [0, 1, 2].map(|a| {
+        hi[a]
+            .checked_sub(lo[a])
+            .and_then(|d| usize::try_from(d).ok())
+            .and_then(|d| d.checked_add(1))
+    });
+    let cells = dims
+        .iter()
+        .try_fold(1usize, |n, d| d.and_then(|d| n.checked_mul(d)));
+    let dense = match cells {
+        Some(n)
+            if cell > 0.0
+                && n <= points.len().saturating_mul(DENSE_CUBES_PER_POINT)
+                && u32::try_from(n).is_ok_and(|n| n < u32::MAX) =>
+        {
+            dense_speck_cubes(points, cell, max_cubes, lo, dims.map(|d| d.unwrap_or(1)))
+        }
+        _ => None,
+    };
+    // Without a box that holds every cube (non-finite coordinates), hashed.
+    dense.unwrap_or_else(|| hashed_speck_cubes(points, cell, max_cubes))
+}
+
+/// Every how many points [`speck_cubes`] looks at a pair of consecutive points to tell a
+/// scan from a depth image: 64 (2 500 pairs of a 160k-point view, a few microseconds).
+const RUN_SAMPLE: usize = 64;
+
+/// Cubes of the dense grid of [`speck_cubes`] per point of the cloud, at most: 4 (16
+/// bytes a point, less than its 24 bytes of coordinates). A depth view's or a room scan's
+/// box at 4 cm has 0.3-3.5 cubes a point; a few far strays spread it past this.
+const DENSE_CUBES_PER_POINT: usize = 4;
+
+/// [`speck_cubes`] over a dense grid of the `dims` cubes from cube `lo` on (x-major: the
+/// cube `lo + (x, y, z)` at `(x * dims[1] + y) * dims[2] + z`, fewer than `u32::MAX`
+/// cubes); `None` if some point's cube is outside it. The points mark their cubes in
+/// parallel pieces (marking twice is marking once), and the occupied cubes are numbered
+/// in grid order.
+fn dense_speck_cubes(
+    points: &[Point3<f64>],
+    cell: f64,
+    max_cubes: usize,
+    lo: [i64; 3],
+    dims: [usize; 3],
+) -> Option<CellSet<[i64; 3]>> {
+    let [_, ny, nz] = dims;
+    // The offset of cube `k` inside the box along each axis, if inside.
+    let at = |k: [i64; 3]| -> Option<[usize; 3]> {
+        let mut o = [0usize; 3];
+        for a in 0..3 {
+            o[a] = usize::try_from(k[a].checked_sub(lo[a])?).ok()?;
+            if o[a] >= dims[a] {
+                return None;
+            }
+        }
+        Some(o)
+    };
+    let index = |[x, y, z]: [usize; 3]| (x * ny + y) * nz + z;
+    // 0: empty; else the cube's number plus one once numbered (1 while only marked).
+    let mut grid: Vec<AtomicU32> = (0..dims.iter().product())
+        .map(|_| AtomicU32::new(0))
         .collect();
-    // The occupied cubes, numbered in the order first met, and each point's number. A
-    // depth image lists row neighbours side by side: a run of points in one cube is
-    // looked up once.
+    let inside = points.par_chunks(PIECE).all(|piece| {
+        let mut last = None;
+        for p in piece {
+            let k = cube_of(p, cell);
+            if last != Some(k) {
+                let Some(o) = at(k) else {
+                    return false;
+                };
+                grid[index(o)].store(1, Ordering::Relaxed);
+                last = Some(k);
+            }
+        }
+        true
+    });
+    if !inside {
+        return None;
+    }
+    // The occupied cubes' offsets in the box, in grid order.
+    let mut cubes: Vec<[usize; 3]> = Vec::new();
+    let mut cells = grid.iter_mut();
+    for x in 0..dims[0] {
+        for y in 0..ny {
+            for (z, g) in (0..nz).zip(cells.by_ref()) {
+                let g = g.get_mut();
+                if *g != 0 {
+                    cubes.push([x, y, z]);
+                    *g = u32::try_from(cubes.len()).unwrap_or(u32::MAX);
+                }
+            }
+        }
+    }
+    let small = small_components(cubes.len(), max_cubes, |i, (dx, dy, dz)| {
+        let [x, y, z] = cubes[i];
+        let n = [
+            x.checked_add_signed(isize::try_from(dx).ok()?)?,
+            y.checked_add_signed(isize::try_from(dy).ok()?)?,
+            z.checked_add_signed(isize::try_from(dz).ok()?)?,
+        ];
+        if n.iter().zip(&dims).any(|(v, d)| v >= d) {
+            return None;
+        }
+        match grid[index(n)].load(Ordering::Relaxed) {
+            0 => None,
+            id => Some(id as usize - 1),
+        }
+    });
+    let set = cubes
+        .iter()
+        .zip(small)
+        .filter(|(_, s)| *s)
+        // Inside the box: the offsets fit `i64` (the box's span did).
+        .map(|(p, _)| [0, 1, 2].map(|a| lo[a] + i64::try_from(p[a]).unwrap_or(0)))
+        .collect();
+    Some(set)
+}
+
+/// [`speck_cubes`] with the occupied cubes in a hash map, numbered in the order first
+/// met. A depth image lists row neighbours side by side: a run of points in one cube is
+/// looked up once.
+fn hashed_speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[i64; 3]> {
     let mut ids: CellMap<[i64; 3], usize> = CellMap::default();
     let mut cubes: Vec<[i64; 3]> = Vec::new();
-    let mut last: Option<([i64; 3], usize)> = None;
-    let point_cube: Vec<usize> = keys
+    let mut last: Option<[i64; 3]> = None;
+    for p in points {
+        let k = cube_of(p, cell);
+        if last != Some(k) {
+            ids.entry(k).or_insert_with(|| {
+                cubes.push(k);
+                cubes.len() - 1
+            });
+            last = Some(k);
+        }
+    }
+    let small = small_components(cubes.len(), max_cubes, |i, (dx, dy, dz)| {
+        let k = cubes[i];
+        let n = [
+            k[0].wrapping_add(dx),
+            k[1].wrapping_add(dy),
+            k[2].wrapping_add(dz),
+        ];
+        ids.get(&n).copied()
+    });
+    cubes
         .iter()
-        .map(|k| match last {
-            Some((lk, id)) if lk == *k => id,
-            _ => {
-                let id = *ids.entry(*k).or_insert_with(|| {
-                    cubes.push(*k);
-                    cubes.len() - 1
-                });
-                last = Some((*k, id));
-                id
-            }
-        })
-        .collect();
-    // Union-find over the cubes: each joined with its occupied neighbours on the 13 sides
-    // after it in (x, y, z) order, which meets every one of the 26 adjacencies once. The
-    // smaller root becomes the parent; the partition is the same in any order.
-    let mut parent: Vec<usize> = (0..cubes.len()).collect();
+        .zip(small)
+        .filter(|(_, s)| *s)
+        .map(|(k, _)| *k)
+        .collect()
+}
+
+/// For each of `n` occupied cubes, whether its 26-connected component has at most
+/// `max_cubes` cubes, where `neighbour(i, d)` is the number of the occupied cube at
+/// offset `d` from cube `i`, if any. Union-find: each cube joined with its occupied
+/// neighbours on the 13 sides after it in (x, y, z) order ([`HALF_NEIGHBOURS`]), which
+/// meets every one of the 26 adjacencies once; the smaller root becomes the parent. The
+/// partition is the same in any order.
+fn small_components(
+    n: usize,
+    max_cubes: usize,
+    neighbour: impl Fn(usize, (i64, i64, i64)) -> Option<usize>,
+) -> Vec<bool> {
+    let mut parent: Vec<usize> = (0..n).collect();
     let root = |parent: &mut [usize], mut x: usize| {
         while parent[x] != x {
             parent[x] = parent[parent[x]];
@@ -65,34 +243,38 @@ pub fn specks(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> Vec<bool> 
         }
         x
     };
-    for (i, k) in cubes.iter().enumerate() {
-        for (dx, dy, dz) in HALF_NEIGHBOURS {
-            let n = [
-                k[0].wrapping_add(dx),
-                k[1].wrapping_add(dy),
-                k[2].wrapping_add(dz),
-            ];
-            if let Some(&j) = ids.get(&n) {
+    for i in 0..n {
+        for d in HALF_NEIGHBOURS {
+            if let Some(j) = neighbour(i, d) {
                 let (a, b) = (root(&mut parent, i), root(&mut parent, j));
                 parent[a.max(b)] = a.min(b);
             }
         }
     }
-    let roots: Vec<usize> = (0..cubes.len()).map(|i| root(&mut parent, i)).collect();
-    let mut size = vec![0usize; cubes.len()];
+    let roots: Vec<usize> = (0..n).map(|i| root(&mut parent, i)).collect();
+    let mut size = vec![0usize; n];
     for &r in &roots {
         size[r] += 1;
     }
-    point_cube
+    roots.iter().map(|&r| size[r] <= max_cubes).collect()
+}
+
+/// For each point of `points`, whether its cube of edge `cell` metres is one of `cubes`
+/// (all `false` when there are none, without looking).
+fn in_cubes(points: &[Point3<f64>], cell: f64, cubes: &CellSet<[i64; 3]>) -> Vec<bool> {
+    if cubes.is_empty() {
+        return vec![false; points.len()];
+    }
+    points
         .par_iter()
         .with_min_len(PIECE)
-        .map(|&c| size[roots[c]] <= max_cubes)
+        .map(|p| cubes.contains(&cube_of(p, cell)))
         .collect()
 }
 
 /// The 13 neighbour offsets after `(0, 0, 0)` in lexicographic order: with their
 /// opposites, the 26 cubes round a cube.
-const HALF_NEIGHBOURS: [(i64, i64, i64); 13] = [
+pub(crate) const HALF_NEIGHBOURS: [(i64, i64, i64); 13] = [
     (0, 0, 1),
     (0, 1, -1),
     (0, 1, 0),
@@ -108,8 +290,8 @@ const HALF_NEIGHBOURS: [(i64, i64, i64); 13] = [
     (1, 1, 1),
 ];
 
-/// Points per parallel piece of the key and answer passes: the same keys and answers
-/// whatever the split (each point's is its own).
+/// Points per parallel piece of the answer pass: the same answers whatever the split
+/// (each point's is its own).
 const PIECE: usize = 8192;
 
 /// `cloud` without its specks ([`specks`]), and how many points were left out; `None`
@@ -119,7 +301,11 @@ pub fn without_specks(
     cell: f64,
     max_cubes: usize,
 ) -> Option<(PointCloud, usize)> {
-    let flags = specks(&cloud.points, cell, max_cubes);
+    let cubes = speck_cubes(&cloud.points, cell, max_cubes);
+    if cubes.is_empty() {
+        return None;
+    }
+    let flags = in_cubes(&cloud.points, cell, &cubes);
     let dropped = flags.iter().filter(|&&f| f).count();
     (dropped > 0).then(|| {
         let kept = cloud
@@ -182,6 +368,94 @@ mod tests {
         pair.push(Point3::new(0.5, 0.5, 0.85));
         let flags = specks(&pair, 0.04, 2);
         assert_eq!(flags.iter().filter(|&&f| f).count(), 2);
+    }
+
+    #[test]
+    fn the_speck_cubes_are_the_cubes_of_the_specks_points() {
+        let mut pts = plane(0.45, 0.01);
+        assert!(speck_cubes(&pts, 0.04, 8).is_empty());
+        // A lone point, and a pair in two cubes side by side.
+        pts.push(Point3::new(0.55, 0.55, 0.75));
+        pts.push(Point3::new(0.21, 0.3, 0.70));
+        pts.push(Point3::new(0.25, 0.3, 0.70));
+        let cubes = speck_cubes(&pts, 0.04, 8);
+        let mut got: Vec<[i64; 3]> = cubes.iter().copied().collect();
+        got.sort_unstable();
+        assert_eq!(got, vec![[5, 7, 17], [6, 7, 17], [13, 13, 18]]);
+        let flags = in_cubes(&pts, 0.04, &cubes);
+        let n = pts.len();
+        assert!(flags[..n - 3].iter().all(|f| !f));
+        assert!(flags[n - 3..].iter().all(|&f| f));
+        // With one cube allowed, the pair is not a speck.
+        let one: Vec<[i64; 3]> = speck_cubes(&pts, 0.04, 1).into_iter().collect();
+        assert_eq!(one, vec![[13, 13, 18]]);
+    }
+
+    #[test]
+    fn the_dense_grid_finds_the_hashed_cubes() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let sorted = |set: CellSet<[i64; 3]>| {
+            let mut v: Vec<[i64; 3]> = set.into_iter().collect();
+            v.sort_unstable();
+            v
+        };
+        let mut found = 0;
+        for round in 0..40 {
+            // Planes, rods and clumps of random sizes, shuffled (no runs), and strays,
+            // some on the box's faces and corners, some negative.
+            let mut pts = plane(rng.random_range(-0.5..0.5), 0.02);
+            for _ in 0..rng.random_range(0..30) {
+                let at = Point3::new(
+                    rng.random_range(-0.6..1.6),
+                    rng.random_range(-0.6..1.6),
+                    rng.random_range(-0.6..1.6),
+                );
+                for _ in 0..rng.random_range(1..12) {
+                    pts.push(
+                        at + Vector3::new(
+                            rng.random_range(0.0..0.08),
+                            rng.random_range(0.0..0.08),
+                            rng.random_range(0.0..0.08),
+                        ),
+                    );
+                }
+            }
+            for i in (1..pts.len()).rev() {
+                pts.swap(i, rng.random_range(0..=i));
+            }
+            let cell = [0.04, 0.05, 0.1][round % 3];
+            let max_cubes = [1, 2, 8][round % 3];
+            let keys: Vec<[i64; 3]> = pts.iter().map(|p| cube_of(p, cell)).collect();
+            let lo = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).min().unwrap());
+            let hi = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).max().unwrap());
+            let dims = [0, 1, 2].map(|a| usize::try_from(hi[a] - lo[a] + 1).unwrap());
+            let hashed = sorted(hashed_speck_cubes(&pts, cell, max_cubes));
+            let dense = sorted(dense_speck_cubes(&pts, cell, max_cubes, lo, dims).unwrap());
+            assert_eq!(dense, hashed, "round {round}");
+            assert_eq!(sorted(speck_cubes(&pts, cell, max_cubes)), hashed);
+            found += hashed.len();
+        }
+        assert!(found > 100, "{found} speck cubes");
+        // Shuffled (no runs) in a small box, with two strays: `speck_cubes` takes the
+        // dense grid, with the hashed answer.
+        let mut shuffled = plane(0.0, 0.01);
+        shuffled.push(Point3::new(0.5, 0.5, 0.6));
+        shuffled.push(Point3::new(0.9, 0.1, 0.3));
+        for i in (1..shuffled.len()).rev() {
+            shuffled.swap(i, rng.random_range(0..=i));
+        }
+        let want = sorted(hashed_speck_cubes(&shuffled, 0.1, 1));
+        assert_eq!(want, vec![[5, 5, 5], [9, 1, 2]]);
+        assert_eq!(sorted(speck_cubes(&shuffled, 0.1, 1)), want);
+        // A non-finite coordinate puts a cube outside the box of the others: hashed.
+        let mut odd = plane(0.0, 0.02);
+        odd.push(Point3::new(f64::NAN, 3.0, 0.5));
+        odd.push(Point3::new(0.5, f64::INFINITY, 0.5));
+        assert_eq!(
+            sorted(speck_cubes(&odd, 0.04, 8)),
+            sorted(hashed_speck_cubes(&odd, 0.04, 8))
+        );
     }
 
     #[test]
