@@ -21,7 +21,7 @@ use parry3d::shape::{Cylinder as ParryCylinder, Voxels};
 
 use crate::cloud::PointCloud;
 use crate::model::agent::Cylinder;
-use crate::num::{floor_i64, to_f32, to_i64, to_usize};
+use crate::num::{floor_i64, index_f32, index_f64, to_f32, to_i64, to_usize};
 
 /// How the scene is built.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -187,8 +187,9 @@ impl Scene {
         let axis = c.b - c.a;
         let len = axis.norm();
         let n = to_usize((len / self.voxel).ceil().max(1.0));
-        let spacing = len / n as f64;
-        let point = |i: usize| c.a + axis * (i as f64 / n as f64);
+        let nf = index_f64(n);
+        let spacing = len / nf;
+        let point = |i: usize| c.a + axis * (index_f64(i) / nf);
         let mut best = f64::INFINITY;
         let mut centres = f64::NEG_INFINITY;
         if self.samples_in_field(c) {
@@ -251,7 +252,7 @@ impl Scene {
                 };
                 if skip > 0 {
                     // Distances to centres are 1-Lipschitz along the axis.
-                    near = near.min(centre - skip as f64 * spacing);
+                    near = near.min(centre - index_f64(skip) * spacing);
                 }
                 i += 1 + skip;
             }
@@ -1475,26 +1476,25 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
     let mut k = 0usize;
     v[0] = first;
     z[0] = f32::NEG_INFINITY;
-    z[1] = f32::INFINITY;
     // A parabola's terms in the intersection: `f[p] + p^2` and `2 p`, as f32.
-    let terms = |p: usize| (f[p] + (p * p) as f32, 2.0 * p as f32);
+    let terms = |p: usize| (f[p] + index_f32(p * p), 2.0 * index_f32(p));
     // The terms of `v[k]`, the top of the envelope, kept as it changes: the same values
     // as computing them at each comparison.
     let (mut hp, mut tp) = terms(first);
+    // The envelope is built reading `z[..=k]` only; the bound past its top, `z[k + 1]`,
+    // is set once it is complete.
     for (q, &fq) in f.iter().enumerate().skip(first + 1) {
         if fq == FAR {
             continue;
         }
         // The new parabola's terms (`terms(q)`).
-        let (hq, q2) = (fq + (q * q) as f32, 2.0 * q as f32);
+        let (hq, q2) = terms(q);
         loop {
             let s = (hq - hp) / (q2 - tp);
             if s <= z[k] {
                 if k == 0 {
                     // The new parabola dominates from -inf: replace.
                     v[0] = q;
-                    z[0] = f32::NEG_INFINITY;
-                    z[1] = f32::INFINITY;
                     (hp, tp) = (hq, q2);
                     break;
                 }
@@ -1504,22 +1504,22 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
                 k += 1;
                 v[k] = q;
                 z[k] = s;
-                z[k + 1] = f32::INFINITY;
                 (hp, tp) = (hq, q2);
                 break;
             }
         }
     }
+    z[k + 1] = f32::INFINITY;
     k = 0;
-    // `v[k]` as f32 and its `f`, kept as `k` changes.
-    let (mut pf, mut fp) = (v[0] as f32, f[v[0]]);
+    // `v[k]` as f32 and its `f`, and `z[k + 1]`, kept as `k` changes.
+    let (mut pf, mut fp, mut next) = (index_f32(v[0]), f[v[0]], z[1]);
     for (q, dq) in d.iter_mut().enumerate().take(n - from.min(n)) {
-        let qf = (q + from) as f32;
-        if z[k + 1] < qf {
+        let qf = index_f32(q + from);
+        if next < qf {
             while z[k + 1] < qf {
                 k += 1;
             }
-            (pf, fp) = (v[k] as f32, f[v[k]]);
+            (pf, fp, next) = (index_f32(v[k]), f[v[k]], z[k + 1]);
         }
         let diff = qf - pf;
         *dq = diff * diff + fp;
