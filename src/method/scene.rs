@@ -381,10 +381,9 @@ impl Scene {
             }
         }
         use parry3d::query::QueryDispatcher;
-        use parry3d::shape::Shape;
         // As parry's `intersection_test` and `intersection_test_voxels_shape` compute them.
         let pos12 = Pose::IDENTITY.inv_mul(&pose);
-        let Some(aabb) = local_aabb.intersection(&shape.compute_aabb(&pos12)) else {
+        let Some(aabb) = local_aabb.intersection(&cylinder_aabb(&shape, &pos12)) else {
             return false;
         };
         // `Voxels::voxel_range_intersecting_local_aabb`.
@@ -806,6 +805,35 @@ fn parry_chunks_aabb(lo: [i64; 3], hi: [i64; 3], size: Vector) -> Aabb {
         ivect_to_vect(key(mins)) * size,
         ivect_to_vect(key(maxs)) * size,
     )
+}
+
+/// Parry's `Cylinder::compute_aabb(pose)` (its `support_map_aabb`: per axis, the
+/// support points toward the axis and against it), from three support points instead
+/// of six: the support point against an axis is the one toward it negated before the
+/// translation, the same values up to the sign of zeros (parry's quaternion rotation and
+/// the cylinder's support map are linear in the direction, and negation commutes with
+/// every rounding), except where the local direction's component along the cylinder's
+/// axis is zero (there the support map's `copysign` reads the sign of that zero, and
+/// parry's own support point is taken). The sign of a zero bound does not change the
+/// voxel range it gives (test `three_support_points_give_parrys_aabb`).
+fn cylinder_aabb(shape: &ParryCylinder, pose: &Pose) -> Aabb {
+    use parry3d::shape::SupportMap;
+    let inv = pose.rotation.inverse();
+    let (mut mins, mut maxs) = (Vector::ZERO, Vector::ZERO);
+    for d in 0..3 {
+        let mut basis = Vector::ZERO;
+        basis[d] = 1.0;
+        let local = inv * basis;
+        let r = pose.rotation * shape.local_support_point(local);
+        maxs[d] = (r + pose.translation)[d];
+        mins[d] = if local.y != 0.0 {
+            (-r + pose.translation)[d]
+        } else {
+            basis[d] = -1.0;
+            shape.support_point(pose, basis)[d]
+        };
+    }
+    Aabb::new(mins, maxs)
 }
 
 /// Where a voxel stands against a cylinder, by its centre.
@@ -2226,6 +2254,58 @@ mod tests {
                 assert_eq!(got.maxs.to_array(), want.maxs.to_array(), "seed {seed}");
             }
         }
+    }
+
+    #[test]
+    fn three_support_points_give_parrys_aabb() {
+        // Cylinders of every orientation, along the grid axes and in the grid planes
+        // (where a local direction's component along the axis is zero), at poses as
+        // `parry_cylinder` builds them: the box equals parry's (`==`, so up to the sign
+        // of zeros) and gives the same voxel range.
+        use parry3d::shape::Shape;
+        let s = furnished(false);
+        let mut state = 777u64;
+        let mut next = || uniform(&mut state);
+        let size = s.size;
+        let range = |b: &Aabb| {
+            (
+                vect_to_ivect((b.mins / size).floor()),
+                vect_to_ivect((b.maxs / size).ceil()),
+            )
+        };
+        let mut zero_component = 0;
+        for i in 0..20_000 {
+            let a = Point3::new(next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 1.5);
+            let mut d = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * next();
+            match i % 5 {
+                0 => d = Vector3::ith(i / 5 % 3, d[i / 5 % 3]),
+                1 => d[i / 5 % 3] = 0.0,
+                _ => {}
+            }
+            let c = Cylinder {
+                joint: 0,
+                a,
+                b: a + d,
+                radius: 0.01 + next() * 0.08,
+            };
+            let Some((pose, shape)) = s.parry_cylinder(&c) else {
+                continue;
+            };
+            let want = shape.compute_aabb(&pose);
+            let got = cylinder_aabb(&shape, &pose);
+            assert!(got.mins == want.mins && got.maxs == want.maxs, "{c:?}");
+            assert_eq!(range(&got), range(&want), "{c:?}");
+            let inv = pose.rotation.inverse();
+            zero_component += (0..3)
+                .filter(|&k| {
+                    let mut e = Vector::ZERO;
+                    e[k] = 1.0;
+                    (inv * e).y == 0.0
+                })
+                .count();
+        }
+        // The fallback to parry's own support point is exercised.
+        assert!(zero_component > 0);
     }
 
     #[test]
