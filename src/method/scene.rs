@@ -205,17 +205,20 @@ impl Scene {
                 let p = point(i);
                 let l = (p.coords - self.origin) / v;
                 let k = cell_of(&l);
-                let known = read
-                    .get(i)
-                    .copied()
-                    .flatten()
-                    .filter(|r| r.0 == k)
-                    .map(|r| r.1);
-                match known.or_else(|| field.get(k)) {
-                    Some(d) => {
-                        if let Some(r) = read.get_mut(i) {
-                            *r = Some((k, d));
+                // The cell read last for this sample, or the field's distance there (kept
+                // for the next time).
+                let got = match read.get_mut(i) {
+                    Some(Some((kept, d))) if *kept == k => Some(*d),
+                    slot => {
+                        let d = field.get(k);
+                        if let (Some(slot), Some(d)) = (slot, d) {
+                            *slot = Some((k, d));
                         }
+                        d
+                    }
+                };
+                match got {
+                    Some(d) => {
                         let centre =
                             Vector3::new(k[0] as f64 + 0.5, k[1] as f64 + 0.5, k[2] as f64 + 0.5);
                         let d = d as f64;
