@@ -1671,16 +1671,25 @@ mod dense {
             let [nx, ny, nz] = self.dims;
             let strip = self.strips[tx].get_or_init(|| self.strip(field, tx));
             let mut out = vec![f32::INFINITY; nz * TILE * TILE].into_boxed_slice();
-            let (mut f, mut d) = (vec![0f32; nz], vec![0f32; nz]);
+            let (y0, y1) = (ty * TILE, ((ty + 1) * TILE).min(ny));
+            // The tile's columns, `((y - y0) * TILE + xi) * nz + z`: at each z the strip
+            // holds the tile's cells side by side (`(z * ny + y) * TILE + xi`), so they
+            // are gathered in one sweep along z.
+            let mut columns = vec![0f32; (y1 - y0) * TILE * nz];
+            for z in 0..nz {
+                let cells = &strip[(z * ny + y0) * TILE..(z * ny + y1) * TILE];
+                for (c, &q) in cells.iter().enumerate() {
+                    columns[c * nz + z] = q;
+                }
+            }
+            let mut d = vec![0f32; nz];
             let (mut vs, mut zs) = (vec![0usize; nz], vec![0f32; nz + 1]);
-            for y in ty * TILE..((ty + 1) * TILE).min(ny) {
+            for yi in 0..y1 - y0 {
                 for xi in 0..TILE.min(nx - tx * TILE) {
-                    for (z, fz) in f.iter_mut().enumerate() {
-                        *fz = strip[(z * ny + y) * TILE + xi];
-                    }
-                    edt_1d(&f, &mut d, &mut vs, &mut zs);
+                    let f = &columns[(yi * TILE + xi) * nz..][..nz];
+                    edt_1d(f, &mut d, &mut vs, &mut zs);
                     for (z, &q) in d.iter().enumerate() {
-                        out[(z * TILE + y % TILE) * TILE + xi] = distance(q, self.voxel);
+                        out[(z * TILE + yi) * TILE + xi] = distance(q, self.voxel);
                     }
                 }
             }
