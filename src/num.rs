@@ -105,6 +105,17 @@ pub(crate) fn index_f32(i: usize) -> f32 {
     }
 }
 
+/// `i as f32` for an index into a slice (or a slice's length), in one instruction on
+/// x86-64: such an index is at most `isize::MAX` (Rust's limit on an allocation), so as
+/// an `i64` it is the same number and converts to the same `f32`. For the positions of
+/// the distance transform's lines.
+#[inline]
+pub(crate) fn slice_index_f32(i: usize) -> f32 {
+    debug_assert!(isize::try_from(i).is_ok());
+    // At most isize::MAX (see the function's doc): the same value as an i64.
+    i as i64 as f32
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -144,7 +155,7 @@ mod tests {
         }
     }
 
-    /// [`index_f64`] and [`index_f32`] against `as` on small and large values, powers of
+    /// [`index_f64`], [`index_f32`] and [`slice_index_f32`] (up to `isize::MAX`) against `as` on small and large values, powers of
     /// two and their neighbours (where rounding ties fall), past `i64::MAX`, and seeded
     /// random values.
     #[test]
@@ -169,6 +180,9 @@ mod tests {
         for i in values {
             assert_eq!(index_f64(i).to_bits(), (i as f64).to_bits(), "{i}");
             assert_eq!(index_f32(i).to_bits(), (i as f32).to_bits(), "{i}");
+            if isize::try_from(i).is_ok() {
+                assert_eq!(slice_index_f32(i).to_bits(), (i as f32).to_bits(), "{i}");
+            }
         }
     }
 }

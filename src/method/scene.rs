@@ -21,7 +21,7 @@ use parry3d::shape::{Cylinder as ParryCylinder, Voxels};
 
 use crate::cloud::PointCloud;
 use crate::model::agent::Cylinder;
-use crate::num::{floor_i64, index_f32, index_f64, to_f32, to_i64, to_usize};
+use crate::num::{floor_i64, index_f32, index_f64, slice_index_f32, to_f32, to_i64, to_usize};
 
 /// How the scene is built.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -1508,7 +1508,7 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
     v[0] = first;
     z[0] = f32::NEG_INFINITY;
     // A parabola's terms in the intersection: `f[p] + p^2` and `2 p`, as f32.
-    let terms = |p: usize| (f[p] + index_f32(p * p), 2.0 * index_f32(p));
+    let terms = |p: usize| (f[p] + index_f32(p * p), 2.0 * slice_index_f32(p));
     // The terms of `v[k]`, the top of the envelope, kept as it changes: the same values
     // as computing them at each comparison.
     let (mut hp, mut tp) = terms(first);
@@ -1543,14 +1543,14 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
     z[k + 1] = f32::INFINITY;
     k = 0;
     // `v[k]` as f32 and its `f`, and `z[k + 1]`, kept as `k` changes.
-    let (mut pf, mut fp, mut next) = (index_f32(v[0]), f[v[0]], z[1]);
+    let (mut pf, mut fp, mut next) = (slice_index_f32(v[0]), f[v[0]], z[1]);
     for (q, dq) in d.iter_mut().enumerate().take(n - from.min(n)) {
-        let qf = index_f32(q + from);
+        let qf = slice_index_f32(q + from);
         if next < qf {
             while z[k + 1] < qf {
                 k += 1;
             }
-            (pf, fp, next) = (index_f32(v[k]), f[v[k]], z[k + 1]);
+            (pf, fp, next) = (slice_index_f32(v[k]), f[v[k]], z[k + 1]);
         }
         let diff = qf - pf;
         *dq = diff * diff + fp;
