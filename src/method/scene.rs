@@ -204,23 +204,25 @@ impl Scene {
             let mut sample = |i: usize| {
                 let p = point(i);
                 let l = (p.coords - self.origin) / v;
-                let k = cell_of(&l);
-                // The cell read last for this sample, or the field's distance there (kept
-                // for the next time).
+                // The cell read last for this sample when the sample is still in it
+                // (its corner `lo` at most `l` and `l` under `lo + 1` along every axis:
+                // then `cell_of(&l)` is that cell), else the field's distance at the
+                // sample's cell (kept for the next time).
                 let got = match read.get_mut(i) {
-                    Some(Some((kept, d))) if *kept == k => Some(*d),
+                    Some(Some(r)) if r.holds(&l) => Some((r.lo, r.d)),
                     slot => {
-                        let d = field.get(k);
-                        if let (Some(slot), Some(d)) = (slot, d) {
-                            *slot = Some((k, d));
-                        }
-                        d
+                        let k = cell_of(&l);
+                        field.get(k).map(|d| {
+                            if let Some(slot) = slot {
+                                *slot = Some(ReadCell::new(k, d));
+                            }
+                            (k.map(|k| k as f64), d)
+                        })
                     }
                 };
                 match got {
-                    Some(d) => {
-                        let centre =
-                            Vector3::new(k[0] as f64 + 0.5, k[1] as f64 + 0.5, k[2] as f64 + 0.5);
+                    Some((lo, d)) => {
+                        let centre = Vector3::new(lo[0] + 0.5, lo[1] + 0.5, lo[2] + 0.5);
                         let d = d as f64;
                         (d - 2.0 * half_diag, d - (l - centre).norm() * v)
                     }
@@ -714,9 +716,43 @@ impl Scene {
     }
 }
 
-/// Per sample along a body part's axis, the cell [`Scene::clearance`] last read for it
-/// (grid key) and that cell's distance (metres), if any.
-type ReadCells = Vec<Option<([i64; 3], f32)>>;
+/// Per sample along a body part's axis, the cell [`Scene::clearance`] last read for it,
+/// if any.
+type ReadCells = Vec<Option<ReadCell>>;
+
+/// A cell of the distance field a clearance sample read: its low corner in voxel units
+/// (local frame) and its distance (metres).
+#[derive(Debug, Clone, Copy)]
+struct ReadCell {
+    /// The grid key as `f64` (exact, as `k as f64` is for keys under 2^52 in size); NaN
+    /// for a larger key, so that [`Self::holds`] never answers for it.
+    lo: [f64; 3],
+    d: f32,
+}
+
+impl ReadCell {
+    /// The cell of grid key `k`, whose distance is `d`.
+    fn new(k: [i64; 3], d: f32) -> ReadCell {
+        const EXACT: i64 = 1 << 52;
+        ReadCell {
+            lo: k.map(|k| {
+                if (-EXACT..EXACT).contains(&k) {
+                    k as f64
+                } else {
+                    f64::NAN
+                }
+            }),
+            d,
+        }
+    }
+
+    /// Whether the position `l` (voxel units, local frame) lies in this cell, so that
+    /// `cell_of(l)` is its key: `lo <= l < lo + 1` along every axis, both bounds exact
+    /// integers below 2^52 (a NaN corner or position holds nothing).
+    fn holds(&self, l: &Vector3<f64>) -> bool {
+        (0..3).all(|a| self.lo[a] <= l[a] && l[a] < self.lo[a] + 1.0)
+    }
+}
 
 /// A lower bound on the clearance ([`Scene::clearance`]) of the body part `c` (voxel edge
 /// `v` metres), given that the part's clearance was `g` at another pose from which no
@@ -2264,6 +2300,44 @@ mod tests {
                 let got = parry_chunks_aabb(lo, hi, Vector::splat(v));
                 assert_eq!(got.mins.to_array(), want.mins.to_array(), "seed {seed}");
                 assert_eq!(got.maxs.to_array(), want.maxs.to_array(), "seed {seed}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_read_cell_holds_exactly_the_positions_of_its_key() {
+        // Positions on and beside cell faces (both signs, near 0 and far out), keys the
+        // positions fall in and keys beside them, huge keys (never held) and NaN: a
+        // read cell holds a position exactly when `cell_of` gives its key.
+        let mut state = 99u64;
+        let mut next = || uniform(&mut state);
+        let mut positions = vec![f64::NAN, f64::INFINITY, -0.0, 0.0];
+        for _ in 0..30_000 {
+            let whole = ((next() - 0.5) * 2e6).round();
+            let x = match to_usize(next() * 4.0) {
+                0 => whole,
+                1 => whole.next_up(),
+                2 => whole.next_down(),
+                _ => whole + next(),
+            };
+            positions.push(x);
+        }
+        for (i, &x) in positions.iter().enumerate() {
+            let y = positions[(i * 7 + 3) % positions.len()];
+            let z = positions[(i * 13 + 5) % positions.len()];
+            let l = Vector3::new(x, y, z);
+            let own = cell_of(&l);
+            for k in [
+                own,
+                [own[0] + 1, own[1], own[2]],
+                [own[0], own[1] - 1, own[2]],
+                [own[0], own[1], own[2] + 1],
+                [1 << 52, own[1], own[2]],
+                [own[0], -(1 << 53) - 1, own[2]],
+            ] {
+                let small = k.iter().all(|k| k.abs() < 1 << 52);
+                let want = small && l.iter().all(|v| v.is_finite()) && cell_of(&l) == k;
+                assert_eq!(ReadCell::new(k, 1.0).holds(&l), want, "{l:?} {k:?}");
             }
         }
     }
