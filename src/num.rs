@@ -82,6 +82,40 @@ pub(crate) fn to_f32(x: f64) -> f32 {
     x as f32
 }
 
+/// `i as f64` for an index or a count: the same value (the integer rounded to the nearest
+/// `f64`), converted from `i64` where it fits, which x86-64 does in one instruction
+/// (`usize` needs a sequence of several, `i64` being the widest signed conversion it has).
+/// For the per-sample and per-cell arithmetic of the contact search and the distance
+/// field.
+#[inline]
+pub(crate) fn index_f64(i: usize) -> f64 {
+    match i64::try_from(i) {
+        Ok(j) => j as f64,
+        Err(_) => i as f64,
+    }
+}
+
+/// `i as f32`, as [`index_f64`] for `f64` (the same value: the integer rounded to the
+/// nearest `f32`).
+#[inline]
+pub(crate) fn index_f32(i: usize) -> f32 {
+    match i64::try_from(i) {
+        Ok(j) => j as f32,
+        Err(_) => i as f32,
+    }
+}
+
+/// `i as f32` for an index into a slice (or a slice's length), in one instruction on
+/// x86-64: such an index is at most `isize::MAX` (Rust's limit on an allocation), so as
+/// an `i64` it is the same number and converts to the same `f32`. For the positions of
+/// the distance transform's lines.
+#[inline]
+pub(crate) fn slice_index_f32(i: usize) -> f32 {
+    debug_assert!(isize::try_from(i).is_ok());
+    // At most isize::MAX (see the function's doc): the same value as an i64.
+    i as i64 as f32
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -118,6 +152,37 @@ mod tests {
         }
         for v in values {
             assert_eq!(floor_i64(v), to_i64(v.floor()), "{v:e}");
+        }
+    }
+
+    /// [`index_f64`], [`index_f32`] and [`slice_index_f32`] (up to `isize::MAX`) against `as` on small and large values, powers of
+    /// two and their neighbours (where rounding ties fall), past `i64::MAX`, and seeded
+    /// random values.
+    #[test]
+    fn index_conversions_equal_as() {
+        use rand::{RngExt, SeedableRng};
+        let mut values: Vec<usize> = (0..10_000).collect();
+        for e in 0..usize::BITS {
+            let b = 1usize << e;
+            values.extend([b, b - 1, b + 1, b | (b >> 1), (b | (b >> 1)) + 1]);
+        }
+        values.extend([
+            usize::MAX,
+            usize::MAX - 1,
+            usize::MAX / 2,
+            usize::MAX / 2 + 1,
+        ]);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        for _ in 0..200_000 {
+            values.push(usize::try_from(rng.random::<u64>()).unwrap_or(usize::MAX));
+            values.push(rng.random_range(0..1usize << 30));
+        }
+        for i in values {
+            assert_eq!(index_f64(i).to_bits(), (i as f64).to_bits(), "{i}");
+            assert_eq!(index_f32(i).to_bits(), (i as f32).to_bits(), "{i}");
+            if isize::try_from(i).is_ok() {
+                assert_eq!(slice_index_f32(i).to_bits(), (i as f32).to_bits(), "{i}");
+            }
         }
     }
 }

@@ -21,7 +21,7 @@ use parry3d::shape::{Cylinder as ParryCylinder, Voxels};
 
 use crate::cloud::PointCloud;
 use crate::model::agent::Cylinder;
-use crate::num::{floor_i64, to_f32, to_i64, to_usize};
+use crate::num::{floor_i64, index_f32, index_f64, slice_index_f32, to_f32, to_i64, to_usize};
 
 /// How the scene is built.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -187,8 +187,9 @@ impl Scene {
         let axis = c.b - c.a;
         let len = axis.norm();
         let n = to_usize((len / self.voxel).ceil().max(1.0));
-        let spacing = len / n as f64;
-        let point = |i: usize| c.a + axis * (i as f64 / n as f64);
+        let nf = index_f64(n);
+        let spacing = len / nf;
+        let point = |i: usize| c.a + axis * (index_f64(i) / nf);
         let mut best = f64::INFINITY;
         let mut centres = f64::NEG_INFINITY;
         if self.samples_in_field(c) {
@@ -203,20 +204,25 @@ impl Scene {
             let mut sample = |i: usize| {
                 let p = point(i);
                 let l = (p.coords - self.origin) / v;
-                let k = cell_of(&l);
-                let known = read
-                    .get(i)
-                    .copied()
-                    .flatten()
-                    .filter(|r| r.0 == k)
-                    .map(|r| r.1);
-                match known.or_else(|| field.get(k)) {
-                    Some(d) => {
-                        if let Some(r) = read.get_mut(i) {
-                            *r = Some((k, d));
-                        }
-                        let centre =
-                            Vector3::new(k[0] as f64 + 0.5, k[1] as f64 + 0.5, k[2] as f64 + 0.5);
+                // The cell read last for this sample when the sample is still in it
+                // (its corner `lo` at most `l` and `l` under `lo + 1` along every axis:
+                // then `cell_of(&l)` is that cell), else the field's distance at the
+                // sample's cell (kept for the next time).
+                let got = match read.get_mut(i) {
+                    Some(Some(r)) if r.holds(&l) => Some((r.lo, r.d)),
+                    slot => {
+                        let k = cell_of(&l);
+                        field.get(k).map(|d| {
+                            if let Some(slot) = slot {
+                                *slot = Some(ReadCell::new(k, d));
+                            }
+                            (k.map(|k| k as f64), d)
+                        })
+                    }
+                };
+                match got {
+                    Some((lo, d)) => {
+                        let centre = Vector3::new(lo[0] + 0.5, lo[1] + 0.5, lo[2] + 0.5);
                         let d = d as f64;
                         (d - 2.0 * half_diag, d - (l - centre).norm() * v)
                     }
@@ -251,7 +257,7 @@ impl Scene {
                 };
                 if skip > 0 {
                     // Distances to centres are 1-Lipschitz along the axis.
-                    near = near.min(centre - skip as f64 * spacing);
+                    near = near.min(centre - index_f64(skip) * spacing);
                 }
                 i += 1 + skip;
             }
@@ -380,10 +386,9 @@ impl Scene {
             }
         }
         use parry3d::query::QueryDispatcher;
-        use parry3d::shape::Shape;
         // As parry's `intersection_test` and `intersection_test_voxels_shape` compute them.
         let pos12 = Pose::IDENTITY.inv_mul(&pose);
-        let Some(aabb) = local_aabb.intersection(&shape.compute_aabb(&pos12)) else {
+        let Some(aabb) = local_aabb.intersection(&cylinder_aabb(&shape, &pos12)) else {
             return false;
         };
         // `Voxels::voxel_range_intersecting_local_aabb`.
@@ -711,9 +716,43 @@ impl Scene {
     }
 }
 
-/// Per sample along a body part's axis, the cell [`Scene::clearance`] last read for it
-/// (grid key) and that cell's distance (metres), if any.
-type ReadCells = Vec<Option<([i64; 3], f32)>>;
+/// Per sample along a body part's axis, the cell [`Scene::clearance`] last read for it,
+/// if any.
+type ReadCells = Vec<Option<ReadCell>>;
+
+/// A cell of the distance field a clearance sample read: its low corner in voxel units
+/// (local frame) and its distance (metres).
+#[derive(Debug, Clone, Copy)]
+struct ReadCell {
+    /// The grid key as `f64` (exact, as `k as f64` is for keys under 2^52 in size); NaN
+    /// for a larger key, so that [`Self::holds`] never answers for it.
+    lo: [f64; 3],
+    d: f32,
+}
+
+impl ReadCell {
+    /// The cell of grid key `k`, whose distance is `d`.
+    fn new(k: [i64; 3], d: f32) -> ReadCell {
+        const EXACT: i64 = 1 << 52;
+        ReadCell {
+            lo: k.map(|k| {
+                if (-EXACT..EXACT).contains(&k) {
+                    k as f64
+                } else {
+                    f64::NAN
+                }
+            }),
+            d,
+        }
+    }
+
+    /// Whether the position `l` (voxel units, local frame) lies in this cell, so that
+    /// `cell_of(l)` is its key: `lo <= l < lo + 1` along every axis, both bounds exact
+    /// integers below 2^52 (a NaN corner or position holds nothing).
+    fn holds(&self, l: &Vector3<f64>) -> bool {
+        (0..3).all(|a| self.lo[a] <= l[a] && l[a] < self.lo[a] + 1.0)
+    }
+}
 
 /// A lower bound on the clearance ([`Scene::clearance`]) of the body part `c` (voxel edge
 /// `v` metres), given that the part's clearance was `g` at another pose from which no
@@ -805,6 +844,35 @@ fn parry_chunks_aabb(lo: [i64; 3], hi: [i64; 3], size: Vector) -> Aabb {
         ivect_to_vect(key(mins)) * size,
         ivect_to_vect(key(maxs)) * size,
     )
+}
+
+/// Parry's `Cylinder::compute_aabb(pose)` (its `support_map_aabb`: per axis, the
+/// support points toward the axis and against it), from three support points instead
+/// of six: the support point against an axis is the one toward it negated before the
+/// translation, the same values up to the sign of zeros (parry's quaternion rotation and
+/// the cylinder's support map are linear in the direction, and negation commutes with
+/// every rounding), except where the local direction's component along the cylinder's
+/// axis is zero (there the support map's `copysign` reads the sign of that zero, and
+/// parry's own support point is taken). The sign of a zero bound does not change the
+/// voxel range it gives (test `three_support_points_give_parrys_aabb`).
+fn cylinder_aabb(shape: &ParryCylinder, pose: &Pose) -> Aabb {
+    use parry3d::shape::SupportMap;
+    let inv = pose.rotation.inverse();
+    let (mut mins, mut maxs) = (Vector::ZERO, Vector::ZERO);
+    for d in 0..3 {
+        let mut basis = Vector::ZERO;
+        basis[d] = 1.0;
+        let local = inv * basis;
+        let r = pose.rotation * shape.local_support_point(local);
+        maxs[d] = (r + pose.translation)[d];
+        mins[d] = if local.y != 0.0 {
+            (-r + pose.translation)[d]
+        } else {
+            basis[d] = -1.0;
+            shape.support_point(pose, basis)[d]
+        };
+    }
+    Aabb::new(mins, maxs)
 }
 
 /// Where a voxel stands against a cylinder, by its centre.
@@ -1475,26 +1543,25 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
     let mut k = 0usize;
     v[0] = first;
     z[0] = f32::NEG_INFINITY;
-    z[1] = f32::INFINITY;
     // A parabola's terms in the intersection: `f[p] + p^2` and `2 p`, as f32.
-    let terms = |p: usize| (f[p] + (p * p) as f32, 2.0 * p as f32);
+    let terms = |p: usize| (f[p] + index_f32(p * p), 2.0 * slice_index_f32(p));
     // The terms of `v[k]`, the top of the envelope, kept as it changes: the same values
     // as computing them at each comparison.
     let (mut hp, mut tp) = terms(first);
+    // The envelope is built reading `z[..=k]` only; the bound past its top, `z[k + 1]`,
+    // is set once it is complete.
     for (q, &fq) in f.iter().enumerate().skip(first + 1) {
         if fq == FAR {
             continue;
         }
         // The new parabola's terms (`terms(q)`).
-        let (hq, q2) = (fq + (q * q) as f32, 2.0 * q as f32);
+        let (hq, q2) = terms(q);
         loop {
             let s = (hq - hp) / (q2 - tp);
             if s <= z[k] {
                 if k == 0 {
                     // The new parabola dominates from -inf: replace.
                     v[0] = q;
-                    z[0] = f32::NEG_INFINITY;
-                    z[1] = f32::INFINITY;
                     (hp, tp) = (hq, q2);
                     break;
                 }
@@ -1504,22 +1571,22 @@ fn edt_1d_range(f: &[f32], from: usize, d: &mut [f32], v: &mut [usize], z: &mut 
                 k += 1;
                 v[k] = q;
                 z[k] = s;
-                z[k + 1] = f32::INFINITY;
                 (hp, tp) = (hq, q2);
                 break;
             }
         }
     }
+    z[k + 1] = f32::INFINITY;
     k = 0;
-    // `v[k]` as f32 and its `f`, kept as `k` changes.
-    let (mut pf, mut fp) = (v[0] as f32, f[v[0]]);
+    // `v[k]` as f32 and its `f`, and `z[k + 1]`, kept as `k` changes.
+    let (mut pf, mut fp, mut next) = (slice_index_f32(v[0]), f[v[0]], z[1]);
     for (q, dq) in d.iter_mut().enumerate().take(n - from.min(n)) {
-        let qf = (q + from) as f32;
-        if z[k + 1] < qf {
+        let qf = slice_index_f32(q + from);
+        if next < qf {
             while z[k + 1] < qf {
                 k += 1;
             }
-            (pf, fp) = (v[k] as f32, f[v[k]]);
+            (pf, fp, next) = (slice_index_f32(v[k]), f[v[k]], z[k + 1]);
         }
         let diff = qf - pf;
         *dq = diff * diff + fp;
@@ -1640,16 +1707,25 @@ mod dense {
             let [nx, ny, nz] = self.dims;
             let strip = self.strips[tx].get_or_init(|| self.strip(field, tx));
             let mut out = vec![f32::INFINITY; nz * TILE * TILE].into_boxed_slice();
-            let (mut f, mut d) = (vec![0f32; nz], vec![0f32; nz]);
+            let (y0, y1) = (ty * TILE, ((ty + 1) * TILE).min(ny));
+            // The tile's columns, `((y - y0) * TILE + xi) * nz + z`: at each z the strip
+            // holds the tile's cells side by side (`(z * ny + y) * TILE + xi`), so they
+            // are gathered in one sweep along z.
+            let mut columns = vec![0f32; (y1 - y0) * TILE * nz];
+            for z in 0..nz {
+                let cells = &strip[(z * ny + y0) * TILE..(z * ny + y1) * TILE];
+                for (c, &q) in cells.iter().enumerate() {
+                    columns[c * nz + z] = q;
+                }
+            }
+            let mut d = vec![0f32; nz];
             let (mut vs, mut zs) = (vec![0usize; nz], vec![0f32; nz + 1]);
-            for y in ty * TILE..((ty + 1) * TILE).min(ny) {
+            for yi in 0..y1 - y0 {
                 for xi in 0..TILE.min(nx - tx * TILE) {
-                    for (z, fz) in f.iter_mut().enumerate() {
-                        *fz = strip[(z * ny + y) * TILE + xi];
-                    }
-                    edt_1d(&f, &mut d, &mut vs, &mut zs);
+                    let f = &columns[(yi * TILE + xi) * nz..][..nz];
+                    edt_1d(f, &mut d, &mut vs, &mut zs);
                     for (z, &q) in d.iter().enumerate() {
-                        out[(z * TILE + y % TILE) * TILE + xi] = distance(q, self.voxel);
+                        out[(z * TILE + yi) * TILE + xi] = distance(q, self.voxel);
                     }
                 }
             }
@@ -2226,6 +2302,96 @@ mod tests {
                 assert_eq!(got.maxs.to_array(), want.maxs.to_array(), "seed {seed}");
             }
         }
+    }
+
+    #[test]
+    fn a_read_cell_holds_exactly_the_positions_of_its_key() {
+        // Positions on and beside cell faces (both signs, near 0 and far out), keys the
+        // positions fall in and keys beside them, huge keys (never held) and NaN: a
+        // read cell holds a position exactly when `cell_of` gives its key.
+        let mut state = 99u64;
+        let mut next = || uniform(&mut state);
+        let mut positions = vec![f64::NAN, f64::INFINITY, -0.0, 0.0];
+        for _ in 0..30_000 {
+            let whole = ((next() - 0.5) * 2e6).round();
+            let x = match to_usize(next() * 4.0) {
+                0 => whole,
+                1 => whole.next_up(),
+                2 => whole.next_down(),
+                _ => whole + next(),
+            };
+            positions.push(x);
+        }
+        for (i, &x) in positions.iter().enumerate() {
+            let y = positions[(i * 7 + 3) % positions.len()];
+            let z = positions[(i * 13 + 5) % positions.len()];
+            let l = Vector3::new(x, y, z);
+            let own = cell_of(&l);
+            for k in [
+                own,
+                [own[0] + 1, own[1], own[2]],
+                [own[0], own[1] - 1, own[2]],
+                [own[0], own[1], own[2] + 1],
+                [1 << 52, own[1], own[2]],
+                [own[0], -(1 << 53) - 1, own[2]],
+            ] {
+                let small = k.iter().all(|k| k.abs() < 1 << 52);
+                let want = small && l.iter().all(|v| v.is_finite()) && cell_of(&l) == k;
+                assert_eq!(ReadCell::new(k, 1.0).holds(&l), want, "{l:?} {k:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn three_support_points_give_parrys_aabb() {
+        // Cylinders of every orientation, along the grid axes and in the grid planes
+        // (where a local direction's component along the axis is zero), at poses as
+        // `parry_cylinder` builds them: the box equals parry's (`==`, so up to the sign
+        // of zeros) and gives the same voxel range.
+        use parry3d::shape::Shape;
+        let s = furnished(false);
+        let mut state = 777u64;
+        let mut next = || uniform(&mut state);
+        let size = s.size;
+        let range = |b: &Aabb| {
+            (
+                vect_to_ivect((b.mins / size).floor()),
+                vect_to_ivect((b.maxs / size).ceil()),
+            )
+        };
+        let mut zero_component = 0;
+        for i in 0..20_000 {
+            let a = Point3::new(next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 1.5);
+            let mut d = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * next();
+            match i % 5 {
+                0 => d = Vector3::ith(i / 5 % 3, d[i / 5 % 3]),
+                1 => d[i / 5 % 3] = 0.0,
+                _ => {}
+            }
+            let c = Cylinder {
+                joint: 0,
+                a,
+                b: a + d,
+                radius: 0.01 + next() * 0.08,
+            };
+            let Some((pose, shape)) = s.parry_cylinder(&c) else {
+                continue;
+            };
+            let want = shape.compute_aabb(&pose);
+            let got = cylinder_aabb(&shape, &pose);
+            assert!(got.mins == want.mins && got.maxs == want.maxs, "{c:?}");
+            assert_eq!(range(&got), range(&want), "{c:?}");
+            let inv = pose.rotation.inverse();
+            zero_component += (0..3)
+                .filter(|&k| {
+                    let mut e = Vector::ZERO;
+                    e[k] = 1.0;
+                    (inv * e).y == 0.0
+                })
+                .count();
+        }
+        // The fallback to parry's own support point is exercised.
+        assert!(zero_component > 0);
     }
 
     #[test]
