@@ -2,7 +2,9 @@
 //! keyed by grid cells (segmentation's cells, the point-spacing tiles and search cells,
 //! the extent guard's coarse cubes). SipHash's protection against chosen keys is of no
 //! use for cells of a point cloud, and its seeds are random: no result may depend on the
-//! maps' order, only their look-ups (each user says why its results do not).
+//! maps' order, only their look-ups (each user says why its results do not). Also the
+//! connected components of occupied cubes that the extent guard and the specks stage
+//! both find ([`component_roots`]).
 
 use std::collections::{HashMap, HashSet};
 use std::hash::{BuildHasherDefault, Hasher};
@@ -93,6 +95,64 @@ where
     out
 }
 
+/// The 13 neighbour offsets after `(0, 0, 0)` in lexicographic order: with their
+/// opposites, the 26 cubes round a cube (through faces, edges and corners).
+pub(crate) const HALF_NEIGHBOURS: [(i64, i64, i64); 13] = [
+    (0, 0, 1),
+    (0, 1, -1),
+    (0, 1, 0),
+    (0, 1, 1),
+    (1, -1, -1),
+    (1, -1, 0),
+    (1, -1, 1),
+    (1, 0, -1),
+    (1, 0, 0),
+    (1, 0, 1),
+    (1, 1, -1),
+    (1, 1, 0),
+    (1, 1, 1),
+];
+
+/// The key of the cube at offset `d` from cube `k` (wrapping at `i64`'s ends, where the
+/// saturated keys of far coordinates lie: a wrong neighbour there joins nothing real).
+pub(crate) fn offset_key(k: [i64; 3], (dx, dy, dz): (i64, i64, i64)) -> [i64; 3] {
+    [
+        k[0].wrapping_add(dx),
+        k[1].wrapping_add(dy),
+        k[2].wrapping_add(dz),
+    ]
+}
+
+/// For each of `n` cubes, the least number of a cube in its 26-connected component, where
+/// `neighbour(i, d)` is the number of the occupied cube at offset `d` from cube `i`, if
+/// any (an empty cube has no neighbours and is its own component). Union-find: each cube
+/// is joined with its neighbours on the 13 sides after it ([`HALF_NEIGHBOURS`]), which
+/// meets every one of the 26 adjacencies once, the smaller root becoming the parent; the
+/// roots are the components' least numbers whatever the order of the joins.
+pub(crate) fn component_roots(
+    n: usize,
+    neighbour: impl Fn(usize, (i64, i64, i64)) -> Option<usize>,
+) -> Vec<usize> {
+    // The root of `x`, halving the path on the way.
+    fn root(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        x
+    }
+    let mut parent: Vec<usize> = (0..n).collect();
+    for i in 0..n {
+        for d in HALF_NEIGHBOURS {
+            if let Some(j) = neighbour(i, d) {
+                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
+                parent[a.max(b)] = a.min(b);
+            }
+        }
+    }
+    (0..n).map(|i| root(&mut parent, i)).collect()
+}
+
 /// `f` run on a pool of `threads` threads, for tests that compare results across thread
 /// counts.
 #[cfg(test)]
@@ -107,6 +167,18 @@ pub(crate) fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_offsets_and_their_opposites_are_the_26_neighbours() {
+        let mut all: Vec<(i64, i64, i64)> = HALF_NEIGHBOURS
+            .iter()
+            .flat_map(|&(x, y, z)| [(x, y, z), (-x, -y, -z)])
+            .collect();
+        all.sort_unstable();
+        all.dedup();
+        assert_eq!(all.len(), 26);
+        assert!(!all.contains(&(0, 0, 0)));
+    }
 
     /// The runs one loop over the items finds, for [`key_runs`] to be compared with.
     fn runs_one_by_one(

@@ -22,10 +22,9 @@ use nalgebra::Point3;
 
 use rayon::prelude::*;
 
-use crate::cellhash::{key_runs, CellMap};
+use crate::cellhash::{component_roots, key_runs, offset_key, CellMap};
 use crate::cloud::PointCloud;
 use crate::detect::DetectConfig;
-use crate::method::specks::HALF_NEIGHBOURS;
 use crate::num::floor_i64;
 
 /// Limits of the guard stage. Defaults carry their reasons.
@@ -296,45 +295,29 @@ fn dense_bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Option<Vec<bool>
     if count.iter().sum::<usize>() != points.len() {
         return None;
     }
-    // Union-find over the occupied cubes, each joined with its occupied neighbours on the
-    // 13 sides after it (which meets every one of the 26 adjacencies once).
-    let mut parent: Vec<usize> = (0..cells).collect();
-    for x in 0..dims[0] {
-        for y in 0..ny {
-            for z in 0..nz {
-                let i = (x * ny + y) * nz + z;
-                if count[i] == 0 {
-                    continue;
-                }
-                for (dx, dy, dz) in HALF_NEIGHBOURS {
-                    let step = |v: usize, d: i64, n: usize| {
-                        v.checked_add_signed(isize::try_from(d).ok()?)
-                            .filter(|&w| w < n)
-                    };
-                    let (Some(u), Some(v), Some(w)) =
-                        (step(x, dx, dims[0]), step(y, dy, ny), step(z, dz, nz))
-                    else {
-                        continue;
-                    };
-                    let j = (u * ny + v) * nz + w;
-                    if count[j] != 0 {
-                        let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-                        parent[a.max(b)] = a.min(b);
-                    }
-                }
-            }
+    // The regions: components of the occupied cubes, numbered by their place in the box.
+    let step = |v: usize, d: i64, n: usize| {
+        v.checked_add_signed(isize::try_from(d).ok()?)
+            .filter(|&w| w < n)
+    };
+    let roots = component_roots(cells, |i, (dx, dy, dz)| {
+        if count[i] == 0 {
+            return None;
         }
-    }
+        let (x, y, z) = (i / (ny * nz), i / nz % ny, i % nz);
+        let j = (step(x, dx, dims[0])? * ny + step(y, dy, ny)?) * nz + step(z, dz, nz)?;
+        (count[j] != 0).then_some(j)
+    });
     let mut region = vec![0usize; cells];
-    for (i, &n) in count.iter().enumerate() {
-        let r = root(&mut parent, i);
+    for (&r, &n) in roots.iter().zip(&count) {
         region[r] += n;
     }
     let largest = region.iter().copied().max().unwrap_or(0);
     let least = share * points.len() as f64;
-    let kept: Vec<bool> = (0..cells)
-        .map(|i| {
-            let n = region[root(&mut parent, i)];
+    let kept: Vec<bool> = roots
+        .iter()
+        .map(|&r| {
+            let n = region[r];
             n == largest || n as f64 >= least
         })
         .collect();
@@ -345,15 +328,6 @@ fn dense_bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Option<Vec<bool>
             .map(|&c| kept[c as usize])
             .collect(),
     )
-}
-
-/// The root of `i` in the union-find `parent`, halving the path on the way.
-fn root(parent: &mut [usize], mut i: usize) -> usize {
-    while parent[i] != i {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    i
 }
 
 /// [`bulk`] by the runs of points in one cube, the cubes hashed.
@@ -378,21 +352,10 @@ fn hashed_bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
             })
         })
         .collect();
-    // Union-find over the occupied cells.
-    let mut parent: Vec<usize> = (0..keys.len()).collect();
-    for (i, k) in keys.iter().enumerate() {
-        for d in 0..27i64 {
-            let o = [d % 3 - 1, d / 3 % 3 - 1, d / 9 - 1];
-            let n = [k[0] + o[0], k[1] + o[1], k[2] + o[2]];
-            if let Some(&j) = cells.get(&n) {
-                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-                if a != b {
-                    parent[a.max(b)] = a.min(b);
-                }
-            }
-        }
-    }
-    let roots: Vec<usize> = (0..keys.len()).map(|i| root(&mut parent, i)).collect();
+    // The regions: components of the occupied cells.
+    let roots = component_roots(keys.len(), |i, d| {
+        cells.get(&offset_key(keys[i], d)).copied()
+    });
     let mut count = vec![0usize; keys.len()];
     for ((_, r), &c) in runs.iter().zip(&of_run) {
         count[roots[c]] += r.len();

@@ -22,7 +22,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use nalgebra::Point3;
 use rayon::prelude::*;
 
-use crate::cellhash::{CellMap, CellSet};
+use crate::cellhash::{component_roots, offset_key, CellMap, CellSet};
 use crate::cloud::PointCloud;
 use crate::num::floor_i64;
 
@@ -207,14 +207,8 @@ fn hashed_speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> Ce
             last = Some(k);
         }
     }
-    let small = small_components(cubes.len(), max_cubes, |i, (dx, dy, dz)| {
-        let k = cubes[i];
-        let n = [
-            k[0].wrapping_add(dx),
-            k[1].wrapping_add(dy),
-            k[2].wrapping_add(dz),
-        ];
-        ids.get(&n).copied()
+    let small = small_components(cubes.len(), max_cubes, |i, d| {
+        ids.get(&offset_key(cubes[i], d)).copied()
     });
     cubes
         .iter()
@@ -224,34 +218,14 @@ fn hashed_speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> Ce
         .collect()
 }
 
-/// For each of `n` occupied cubes, whether its 26-connected component has at most
-/// `max_cubes` cubes, where `neighbour(i, d)` is the number of the occupied cube at
-/// offset `d` from cube `i`, if any. Union-find: each cube joined with its occupied
-/// neighbours on the 13 sides after it in (x, y, z) order ([`HALF_NEIGHBOURS`]), which
-/// meets every one of the 26 adjacencies once; the smaller root becomes the parent. The
-/// partition is the same in any order.
+/// For each of `n` occupied cubes, whether its 26-connected component
+/// ([`component_roots`], with `neighbour` as there) has at most `max_cubes` cubes.
 fn small_components(
     n: usize,
     max_cubes: usize,
     neighbour: impl Fn(usize, (i64, i64, i64)) -> Option<usize>,
 ) -> Vec<bool> {
-    let mut parent: Vec<usize> = (0..n).collect();
-    let root = |parent: &mut [usize], mut x: usize| {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    };
-    for i in 0..n {
-        for d in HALF_NEIGHBOURS {
-            if let Some(j) = neighbour(i, d) {
-                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-                parent[a.max(b)] = a.min(b);
-            }
-        }
-    }
-    let roots: Vec<usize> = (0..n).map(|i| root(&mut parent, i)).collect();
+    let roots = component_roots(n, neighbour);
     let mut size = vec![0usize; n];
     for &r in &roots {
         size[r] += 1;
@@ -271,24 +245,6 @@ fn in_cubes(points: &[Point3<f64>], cell: f64, cubes: &CellSet<[i64; 3]>) -> Vec
         .map(|p| cubes.contains(&cube_of(p, cell)))
         .collect()
 }
-
-/// The 13 neighbour offsets after `(0, 0, 0)` in lexicographic order: with their
-/// opposites, the 26 cubes round a cube.
-pub(crate) const HALF_NEIGHBOURS: [(i64, i64, i64); 13] = [
-    (0, 0, 1),
-    (0, 1, -1),
-    (0, 1, 0),
-    (0, 1, 1),
-    (1, -1, -1),
-    (1, -1, 0),
-    (1, -1, 1),
-    (1, 0, -1),
-    (1, 0, 0),
-    (1, 0, 1),
-    (1, 1, -1),
-    (1, 1, 0),
-    (1, 1, 1),
-];
 
 /// Points per parallel piece of the answer pass: the same answers whatever the split
 /// (each point's is its own).
@@ -332,18 +288,6 @@ mod tests {
         (0..n)
             .flat_map(|i| (0..n).map(move |j| Point3::new(i as f64 * step, j as f64 * step, z)))
             .collect()
-    }
-
-    #[test]
-    fn the_offsets_and_their_opposites_are_the_26_neighbours() {
-        let mut all: Vec<(i64, i64, i64)> = HALF_NEIGHBOURS
-            .iter()
-            .flat_map(|&(x, y, z)| [(x, y, z), (-x, -y, -z)])
-            .collect();
-        all.sort_unstable();
-        all.dedup();
-        assert_eq!(all.len(), 26);
-        assert!(!all.contains(&(0, 0, 0)));
     }
 
     #[test]
