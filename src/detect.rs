@@ -11,6 +11,7 @@ use crate::cloud::{point_spacing, PointCloud};
 use crate::method::extent::{guard, ExtentConfig, ExtentError};
 use crate::method::fit::{fit, ContactConfig, Fit};
 use crate::method::heightmap::{HeightMap, HeightMapConfig};
+use crate::method::holes::{fill, fill_points, holes, HoleConfig};
 use crate::method::hypotheses::{hypotheses, Hypothesis};
 use crate::method::scene::{Scene, SceneConfig};
 use crate::method::select::{segment_in, suppress, SegmentConfig, SegmentGrid};
@@ -25,6 +26,8 @@ use crate::model::set::Model;
 pub struct DetectConfig {
     /// The height map (section 4.1).
     pub heightmap: HeightMapConfig,
+    /// The holes of a view filled before the grids ([`crate::method::holes`]).
+    pub holes: HoleConfig,
     /// Voxelisation of the scene.
     pub scene: SceneConfig,
     /// Contact location.
@@ -66,6 +69,7 @@ impl DetectConfig {
     pub fn for_voxel(voxel_size: f64) -> Self {
         DetectConfig {
             heightmap: HeightMapConfig::default(),
+            holes: HoleConfig::default(),
             scene: SceneConfig {
                 voxel_size,
                 // Paper, section 3.1: agent and scene share the ground plane z = 0.
@@ -183,13 +187,25 @@ fn prepare_spaced(
     cfg: &DetectConfig,
     spacing: Option<Option<f64>>,
 ) -> Prepared {
-    let (map, scene) = rayon::join(
+    let (mut map, scene) = rayon::join(
         || match spacing {
             Some(s) => HeightMap::from_cloud_spaced(cloud, &cfg.heightmap, s),
             None => HeightMap::from_cloud(cloud, &cfg.heightmap),
         },
         || Scene::new(cloud, &cfg.scene),
     );
+    // The holes the scan closes round are filled: their cells valid in the map, their
+    // voxels occupied in a scene built again with the fill.
+    let found = holes(&map, &cfg.holes);
+    if found.is_empty() {
+        return Prepared { map, scene };
+    }
+    let fill_at = fill_points(&map, &found, cfg.scene.voxel_size);
+    fill(&mut map, &found);
+    let mut points = Vec::with_capacity(cloud.len() + fill_at.len());
+    points.extend_from_slice(&cloud.points);
+    points.extend(fill_at);
+    let scene = Scene::new(&PointCloud::new(points), &cfg.scene);
     Prepared { map, scene }
 }
 
@@ -490,6 +506,66 @@ fn to_detection(agent: &Agent, h: &Hierarchy, hyp: &Hypothesis, u: &Unfolded) ->
 mod tests {
     use super::*;
     use crate::model::set::ModelChoice;
+
+    /// Points on a grid of `step` metres over the box `lo`-`hi` (x, y) at height `z`.
+    fn patch(lo: (f64, f64), hi: (f64, f64), z: f64, step: f64, out: &mut Vec<Point3<f64>>) {
+        let n = |a: f64, b: f64| crate::num::to_usize(((b - a) / step).round());
+        for j in 0..=n(lo.1, hi.1) {
+            for i in 0..=n(lo.0, hi.0) {
+                out.push(Point3::new(
+                    lo.0 + i as f64 * step,
+                    lo.1 + j as f64 * step,
+                    z,
+                ));
+            }
+        }
+    }
+
+    /// The height map's cell at world `(x, y)`.
+    fn map_at(m: &HeightMap, x: f64, y: f64) -> Option<f64> {
+        let ix = crate::num::to_isize(((x - m.x0) / m.cell).floor());
+        let iy = crate::num::to_isize(((y - m.y0) / m.cell).floor());
+        m.get(ix, iy)
+    }
+
+    #[test]
+    fn a_seat_hidden_behind_its_arm_is_filled_a_gap_to_the_floor_is_not() {
+        // A sofa's seat (x 0-1.2 m, y 0-0.6 m, 0.45 m high) with its back along y = 0.6-0.7
+        // and an arm along x = -0.1-0 (both 0.65-0.8 m high, solid), and the floor round
+        // it; the seat's corner next to the arm (x 0-0.4, y 0.1-0.5) unseen, as from a
+        // camera on the arm's side.
+        let mut pts = Vec::new();
+        patch((-1.0, -1.0), (2.0, -0.05), 0.0, 0.02, &mut pts);
+        patch((-1.0, 0.75), (2.0, 1.5), 0.0, 0.02, &mut pts);
+        for z in [0.65, 0.7, 0.75, 0.8] {
+            patch((-0.1, 0.6), (1.2, 0.7), z, 0.02, &mut pts);
+            patch((-0.1, 0.0), (0.0, 0.7), z, 0.02, &mut pts);
+        }
+        let seat_len = pts.len();
+        patch((0.0, 0.0), (1.2, 0.6), 0.45, 0.02, &mut pts);
+        let hidden = |p: &Point3<f64>| p.x > 0.01 && p.x < 0.4 && p.y > 0.1 && p.y < 0.5;
+        let mut seen: Vec<Point3<f64>> = pts[..seat_len].to_vec();
+        seen.extend(pts[seat_len..].iter().filter(|p| !hidden(p)));
+        let cfg = DetectConfig::default();
+        let p = prepare(&PointCloud::new(seen.clone()), &cfg);
+        assert_eq!(map_at(&p.map, 0.2, 0.3), Some(0.45));
+        assert!(p.scene.point_clearance(&Point3::new(0.2, 0.3, 0.47)) < 0.03);
+        // Without the fill the corner is invalid and the scene free there.
+        let none = DetectConfig {
+            holes: HoleConfig {
+                max_area: 0.0,
+                ..HoleConfig::default()
+            },
+            ..cfg
+        };
+        let q = prepare(&PointCloud::new(seen.clone()), &none);
+        assert_eq!(map_at(&q.map, 0.2, 0.3), None);
+        assert!(q.scene.point_clearance(&Point3::new(0.2, 0.3, 0.47)) > 0.03);
+        // A cut through the seat to its front edge, where the floor shows: not filled.
+        seen.retain(|p| !(p.z > 0.4 && p.z < 0.5 && p.x > 0.01 && p.x < 0.4 && p.y < 0.5));
+        let p = prepare(&PointCloud::new(seen), &cfg);
+        assert_eq!(map_at(&p.map, 0.2, 0.3), None);
+    }
 
     #[test]
     fn every_model_at_once_gives_each_model_alone_whatever_the_threads() {

@@ -471,6 +471,18 @@ impl HeightMap {
         }
     }
 
+    /// Sets cell `(ix, iy)` (inside the map) to `height`, storing its tile if no point
+    /// reached it (the new tile's other cells invalid).
+    pub fn set(&mut self, ix: usize, iy: usize, height: f64) {
+        let t = self.tile_of(ix, iy);
+        if self.tiles[t] == NO_TILE {
+            self.tiles[t] = self.heights.len() / (TILE * TILE);
+            self.heights.resize(self.heights.len() + TILE * TILE, None);
+        }
+        let i = self.index(ix, iy);
+        self.heights[i] = Some(height);
+    }
+
     /// The heights of the valid cells, in no particular order.
     pub fn valid_heights(&self) -> impl Iterator<Item = f64> + '_ {
         self.heights.iter().flatten().copied()

@@ -1,0 +1,324 @@
+//! Holes in the scan: surfaces the camera did not see because something nearer hid them,
+//! filled at the level of what surrounds them before the grids are built.
+//!
+//! A single view leaves a shadow behind every edge: the seat of a sofa behind its own arm,
+//! the cushion behind a pillow, the desk top behind a monitor. The height map (section
+//! 4.1) has no valid cell there, so no hypothesis, and the voxel scene has nothing for the
+//! pelvis to rest on, so no fit: the place next to an armrest, where the body would use
+//! it, is exactly the one an arm hides from a camera on its side. A hole is filled when
+//! the scan closes round it at one level: a component of invalid height-map cells that
+//! does not reach the map's border, at most `max_area`, whose rim (the valid cells
+//! beside it) lies at two heights: its lowest part at one level, continued by the hidden
+//! surface, and the rest well above it, the edges that hid it. Such a hole is a surface seen
+//! through an occluder, not a gap between objects: between objects the floor shows, or
+//! the hole opens onto the map's border. A shadow that opens onto space behind the
+//! furniture (the seat of a chair seen from behind) is not filled, nor one whose rim is
+//! the floor.
+//!
+//! The fill is points on the scene's voxel grid at the rim's level over the hole's cells,
+//! added to the cloud the height map and the scene are built from (not to the segmented
+//! points); this is not in the paper.
+
+use std::collections::{HashMap, HashSet};
+
+use nalgebra::Point3;
+
+use crate::method::heightmap::HeightMap;
+use crate::num::to_usize;
+
+/// When a hole is filled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HoleConfig {
+    /// Largest hole filled, square metres.
+    pub max_area: f64,
+    /// Smallest hole filled, square metres: smaller ones are gaps in the sampling, which
+    /// the height map's reach and the hypotheses' tolerance of invalid cells deal with.
+    pub min_area: f64,
+    /// The rim's level is this quantile of its cells' heights (0 the lowest).
+    pub rim_quantile: f64,
+    /// Rim cells within this many metres of the level are at it.
+    pub rim_tolerance: f64,
+    /// The share of the rim's cells at its level, at least, for the hole to be filled.
+    pub rim_share: f64,
+    /// What hides a surface rises at least this many metres above it (an arm, a back):
+    /// rim cells above the level by more than `rim_tolerance` but at most this are the
+    /// surface sloping or stepping into the hole, whose hidden part's shape is unknown.
+    pub occluder_rise: f64,
+    /// The share of the rim's cells, at most, in that band for the hole to be filled.
+    pub slope_share: f64,
+    /// Holes whose level is below this, metres above the floor, are left empty.
+    pub min_level: f64,
+}
+
+impl Default for HoleConfig {
+    fn default() -> Self {
+        HoleConfig {
+            // 0.6 m²: a sofa seat hidden behind its arm (0.6 x 0.7 m at most); larger
+            // enclosed holes are floors behind furniture, not seats.
+            max_area: 0.6,
+            // 0.01 m² (four 5 cm cells): an arm 0.15 m above a seat seen from 30 degrees
+            // above hides a band 0.25 m wide; sparse sampling leaves single cells.
+            min_area: 0.01,
+            // The lowest tenth of the rim may be noise or a peek at the floor through a
+            // gap; above it, the lowest surface round the hole is the one it continues.
+            rim_quantile: 0.1,
+            // 0.05 m: one height-map cell; cushions and seat edges vary 1-3 cm.
+            rim_tolerance: 0.05,
+            // 0.3: a hole behind an arm is closed by the seat on one or two sides and by
+            // the arm and the back, higher, on the others.
+            rim_share: 0.3,
+            // 0.10 m: arms rise 0.12-0.35 m over a seat (the armrest band), backs more;
+            // a reclined back or a cushion's slope climbs through the band.
+            occluder_rise: 0.10,
+            // 0.1: a tenth of the rim may be a cushion's rounded edge or noise.
+            slope_share: 0.1,
+            // 0.15 m: below the lowest seat (0.14 H = 0.25 m at 1.75 m) and above the
+            // floor's noise: a hole in the floor is no seat.
+            min_level: 0.15,
+        }
+    }
+}
+
+/// An enclosed hole of a height map that [`holes`] fills.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hole {
+    /// Its cells `(ix, iy)`, row by row.
+    pub cells: Vec<(usize, usize)>,
+    /// The height it is filled at, metres (world z): the median of the rim cells at the
+    /// rim's level.
+    pub height: f64,
+}
+
+/// The four cells beside a cell, in a fixed order.
+const SIDES: [(isize, isize); 4] = [(1, 0), (-1, 0), (0, 1), (0, -1)];
+
+/// The enclosed holes of `map` that `cfg` fills. Deterministic: holes are found from the
+/// valid cells in row-major order.
+pub fn holes(map: &HeightMap, cfg: &HoleConfig) -> Vec<Hole> {
+    let max_cells = to_usize((cfg.max_area / (map.cell * map.cell)).floor());
+    let min_cells = cfg.min_area / (map.cell * map.cell) - 1e-9;
+    // Cells already visited: true inside a filled or rejected enclosed hole, false in an
+    // open one (reaching the border or too large).
+    let mut seen: HashMap<(usize, usize), bool> = HashMap::new();
+    let mut out = Vec::new();
+    let inside =
+        |x: isize, y: isize| x >= 0 && y >= 0 && (x as usize) < map.nx && (y as usize) < map.ny;
+    for iy in 0..map.ny {
+        for ix in map.stored_columns(iy, 1).collect::<Vec<_>>() {
+            if map.get(ix as isize, iy as isize).is_none() {
+                continue;
+            }
+            for (dx, dy) in SIDES {
+                let (sx, sy) = (ix as isize + dx, iy as isize + dy);
+                if !inside(sx, sy) || map.get(sx, sy).is_some() {
+                    continue;
+                }
+                let start = (sx as usize, sy as usize);
+                if seen.contains_key(&start) {
+                    continue;
+                }
+                if let Some(hole) = flood(map, start, (min_cells, max_cells), &mut seen, cfg) {
+                    out.push(hole);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Grows the component of invalid cells from `start`, marks it in `seen`, and gives it
+/// with its level when it is enclosed, small enough and its rim is level enough.
+fn flood(
+    map: &HeightMap,
+    start: (usize, usize),
+    (min_cells, max_cells): (f64, usize),
+    seen: &mut HashMap<(usize, usize), bool>,
+    cfg: &HoleConfig,
+) -> Option<Hole> {
+    let mut comp = vec![start];
+    let mut members: HashSet<(usize, usize)> = HashSet::from([start]);
+    let mut rim: HashSet<(usize, usize)> = HashSet::new();
+    let mut open = false;
+    let mut next = 0;
+    'grow: while next < comp.len() {
+        let (cx, cy) = comp[next];
+        next += 1;
+        for (dx, dy) in SIDES {
+            let (x, y) = (cx as isize + dx, cy as isize + dy);
+            if x < 0 || y < 0 || x as usize >= map.nx || y as usize >= map.ny {
+                open = true;
+                break 'grow;
+            }
+            let c = (x as usize, y as usize);
+            if map.get(x, y).is_some() {
+                rim.insert(c);
+            } else if let Some(&closed) = seen.get(&c) {
+                if !closed {
+                    open = true;
+                    break 'grow;
+                }
+            } else if members.insert(c) {
+                comp.push(c);
+                if comp.len() > max_cells {
+                    open = true;
+                    break 'grow;
+                }
+            }
+        }
+    }
+    for c in &comp {
+        seen.insert(*c, !open);
+    }
+    if open || rim.is_empty() || (comp.len() as f64) < min_cells {
+        return None;
+    }
+    let mut heights: Vec<f64> = rim
+        .iter()
+        .filter_map(|&(x, y)| map.get(x as isize, y as isize))
+        .collect();
+    heights.sort_by(f64::total_cmp);
+    let q = to_usize((cfg.rim_quantile * (heights.len() - 1) as f64).round());
+    let level = heights[q.min(heights.len() - 1)];
+    let n = heights.len() as f64;
+    let above = |h: f64| h - level;
+    let at = heights
+        .iter()
+        .filter(|&&h| above(h).abs() <= cfg.rim_tolerance)
+        .count();
+    // Rim cells a little above the level: the surface climbs into the hole.
+    let sloping = heights
+        .iter()
+        .filter(|&&h| above(h) > cfg.rim_tolerance && above(h) <= cfg.occluder_rise)
+        .count();
+    if level < cfg.min_level
+        || (at as f64) < cfg.rim_share * n
+        || sloping as f64 > cfg.slope_share * n
+    {
+        return None;
+    }
+    // Filled at the middle of the rim cells at the level (sorted, so the middle one),
+    // not at its lower edge: a fill below the surface round it would be a dip in it.
+    let first = heights.partition_point(|&h| above(h) < -cfg.rim_tolerance);
+    let middle = heights[first + at / 2];
+    comp.sort_unstable_by_key(|&(x, y)| (y, x));
+    Some(Hole {
+        cells: comp,
+        height: middle,
+    })
+}
+
+/// Sets the cells of `holes` in `map` to their heights.
+pub fn fill(map: &mut HeightMap, holes: &[Hole]) {
+    for hole in holes {
+        for &(ix, iy) in &hole.cells {
+            map.set(ix, iy, hole.height);
+        }
+    }
+}
+
+/// Points filling `holes` of `map`: per hole cell, a square grid of points at most
+/// `step` metres apart (the scene's voxel edge) at the hole's height, world frame.
+pub fn fill_points(map: &HeightMap, holes: &[Hole], step: f64) -> Vec<Point3<f64>> {
+    let n = to_usize((map.cell / step).ceil()).max(1);
+    let d = map.cell / n as f64;
+    let mut out = Vec::new();
+    for hole in holes {
+        for &(ix, iy) in &hole.cells {
+            let (x0, y0) = (map.x0 + ix as f64 * map.cell, map.y0 + iy as f64 * map.cell);
+            for j in 0..n {
+                for i in 0..n {
+                    let (x, y) = (x0 + (i as f64 + 0.5) * d, y0 + (j as f64 + 0.5) * d);
+                    out.push(Point3::new(x, y, hole.height));
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 12 x 12 map of 0.05 m cells: a seat at 0.45 m with a 3 x 3 hole in it.
+    fn seat_with_hole(rim: f64) -> Vec<Option<f64>> {
+        let mut h = vec![Some(0.0); 144];
+        for y in 2..10 {
+            for x in 2..10 {
+                h[y * 12 + x] = Some(rim);
+            }
+        }
+        for y in 5..8 {
+            for x in 5..8 {
+                h[y * 12 + x] = None;
+            }
+        }
+        h
+    }
+
+    #[test]
+    fn a_hole_inside_a_seat_is_filled_at_its_level() {
+        let map = HeightMap::from_dense(0.0, 0.0, 0.05, 12, 12, &seat_with_hole(0.45));
+        let found = holes(&map, &HoleConfig::default());
+        assert_eq!(found.len(), 1);
+        assert_eq!(found[0].cells.len(), 9);
+        assert_eq!(found[0].height, 0.45);
+        let pts = fill_points(&map, &found, 0.02);
+        // 3 x 3 points per 0.05 m cell at a 0.02 m step.
+        assert_eq!(pts.len(), 81);
+        assert!(pts.iter().all(|p| p.z == 0.45 && p.x > 0.25 && p.x < 0.40));
+        let mut filled = map.clone();
+        fill(&mut filled, &found);
+        assert_eq!(filled.get(6, 6), Some(0.45));
+        assert_eq!(filled.get(0, 0), Some(0.0));
+        assert!(holes(&filled, &HoleConfig::default()).is_empty());
+    }
+
+    #[test]
+    fn holes_in_the_floor_open_ones_and_large_ones_stay_empty() {
+        // At floor level.
+        let map = HeightMap::from_dense(0.0, 0.0, 0.05, 12, 12, &seat_with_hole(0.05));
+        assert!(holes(&map, &HoleConfig::default()).is_empty());
+        // Open onto the map's border: the hole's row runs out of the map.
+        let mut h = seat_with_hole(0.45);
+        for x in 0..12 {
+            h[6 * 12 + x] = None;
+        }
+        let map = HeightMap::from_dense(0.0, 0.0, 0.05, 12, 12, &h);
+        assert!(holes(&map, &HoleConfig::default()).is_empty());
+        // Larger than allowed.
+        let map = HeightMap::from_dense(0.0, 0.0, 0.05, 12, 12, &seat_with_hole(0.45));
+        let small = HoleConfig {
+            max_area: 8.0 * 0.0025,
+            ..HoleConfig::default()
+        };
+        assert!(holes(&map, &small).is_empty());
+    }
+
+    #[test]
+    fn a_rim_of_mixed_heights_is_not_level() {
+        // The hole's rim: the seat at 0.45 on one side, a back at 0.9 round the rest: a
+        // quarter of the rim at the level, under the share asked.
+        let mut h = seat_with_hole(0.9);
+        for x in 4..9 {
+            h[4 * 12 + x] = Some(0.45);
+        }
+        let map = HeightMap::from_dense(0.0, 0.0, 0.05, 12, 12, &h);
+        assert!(holes(&map, &HoleConfig::default()).is_empty());
+        // With the seat on two sides it is a seat behind an arm and a back: filled at 0.45.
+        for y in 4..9 {
+            h[y * 12 + 8] = Some(0.45);
+        }
+        let map = HeightMap::from_dense(0.0, 0.0, 0.05, 12, 12, &h);
+        let found = holes(&map, &HoleConfig::default());
+        assert_eq!(found.len(), 1);
+        assert_eq!(found[0].height, 0.45);
+        // A third side 7 cm above the seat: the surface climbs into the hole (a reclined
+        // back), whose hidden shape is unknown: not filled.
+        for x in 5..8 {
+            h[8 * 12 + x] = Some(0.52);
+        }
+        let map = HeightMap::from_dense(0.0, 0.0, 0.05, 12, 12, &h);
+        assert!(holes(&map, &HoleConfig::default()).is_empty());
+    }
+}
