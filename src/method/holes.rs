@@ -19,7 +19,7 @@
 //! added to the cloud the height map and the scene are built from (not to the segmented
 //! points); this is not in the paper.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 
 use nalgebra::Point3;
 
@@ -92,20 +92,53 @@ pub struct Hole {
 /// The four cells beside a cell, in a fixed order.
 const SIDES: [(isize, isize); 4] = [(1, 0), (-1, 0), (0, 1), (0, -1)];
 
+/// One bit per cell of a height map.
+struct Bits {
+    nx: usize,
+    words: Vec<u64>,
+}
+
+impl Bits {
+    fn new(map: &HeightMap) -> Bits {
+        Bits {
+            nx: map.nx,
+            words: vec![0; (map.nx * map.ny).div_ceil(64)],
+        }
+    }
+
+    fn get(&self, (x, y): (usize, usize)) -> bool {
+        let i = y * self.nx + x;
+        self.words[i / 64] >> (i % 64) & 1 == 1
+    }
+
+    fn set(&mut self, (x, y): (usize, usize), on: bool) {
+        let i = y * self.nx + x;
+        if on {
+            self.words[i / 64] |= 1 << (i % 64);
+        } else {
+            self.words[i / 64] &= !(1 << (i % 64));
+        }
+    }
+}
+
 /// The enclosed holes of `map` that `cfg` fills. Deterministic: holes are found from the
-/// valid cells in row-major order.
+/// valid cells at least `cfg.min_level` high (every hole filled has such cells in its
+/// rim), in row-major order. Each invalid cell is visited at most once: a search that
+/// meets a cell an earlier one found open is open too. Memory: two bits per cell.
 pub fn holes(map: &HeightMap, cfg: &HoleConfig) -> Vec<Hole> {
     let max_cells = to_usize((cfg.max_area / (map.cell * map.cell)).floor());
     let min_cells = cfg.min_area / (map.cell * map.cell) - 1e-9;
-    // Cells already visited: true inside a filled or rejected enclosed hole, false in an
-    // open one (reaching the border or too large).
-    let mut seen: HashMap<(usize, usize), bool> = HashMap::new();
+    let mut seen = Bits::new(map);
+    let mut current = Bits::new(map);
     let mut out = Vec::new();
     let inside =
         |x: isize, y: isize| x >= 0 && y >= 0 && (x as usize) < map.nx && (y as usize) < map.ny;
     for iy in 0..map.ny {
         for ix in map.stored_columns(iy, 1).collect::<Vec<_>>() {
-            if map.get(ix as isize, iy as isize).is_none() {
+            if map
+                .get(ix as isize, iy as isize)
+                .is_none_or(|h| h < cfg.min_level)
+            {
                 continue;
             }
             for (dx, dy) in SIDES {
@@ -114,10 +147,11 @@ pub fn holes(map: &HeightMap, cfg: &HoleConfig) -> Vec<Hole> {
                     continue;
                 }
                 let start = (sx as usize, sy as usize);
-                if seen.contains_key(&start) {
+                if seen.get(start) {
                     continue;
                 }
-                if let Some(hole) = flood(map, start, (min_cells, max_cells), &mut seen, cfg) {
+                let marks = (&mut seen, &mut current);
+                if let Some(hole) = flood(map, start, (min_cells, max_cells), marks, cfg) {
                     out.push(hole);
                 }
             }
@@ -126,17 +160,19 @@ pub fn holes(map: &HeightMap, cfg: &HoleConfig) -> Vec<Hole> {
     out
 }
 
-/// Grows the component of invalid cells from `start`, marks it in `seen`, and gives it
-/// with its level when it is enclosed, small enough and its rim is level enough.
+/// Grows the component of invalid cells from `start` (not yet `seen`), marks it `seen`,
+/// and gives it with its level when it is enclosed, small enough and its rim level
+/// enough. `current` is clear before and after.
 fn flood(
     map: &HeightMap,
     start: (usize, usize),
     (min_cells, max_cells): (f64, usize),
-    seen: &mut HashMap<(usize, usize), bool>,
+    (seen, current): (&mut Bits, &mut Bits),
     cfg: &HoleConfig,
 ) -> Option<Hole> {
     let mut comp = vec![start];
-    let mut members: HashSet<(usize, usize)> = HashSet::from([start]);
+    seen.set(start, true);
+    current.set(start, true);
     let mut rim: HashSet<(usize, usize)> = HashSet::new();
     let mut open = false;
     let mut next = 0;
@@ -152,12 +188,15 @@ fn flood(
             let c = (x as usize, y as usize);
             if map.get(x, y).is_some() {
                 rim.insert(c);
-            } else if let Some(&closed) = seen.get(&c) {
-                if !closed {
-                    open = true;
-                    break 'grow;
-                }
-            } else if members.insert(c) {
+            } else if current.get(c) {
+                continue;
+            } else if seen.get(c) {
+                // Found by an earlier search, which gave it up: open.
+                open = true;
+                break 'grow;
+            } else {
+                seen.set(c, true);
+                current.set(c, true);
                 comp.push(c);
                 if comp.len() > max_cells {
                     open = true;
@@ -166,8 +205,8 @@ fn flood(
             }
         }
     }
-    for c in &comp {
-        seen.insert(*c, !open);
+    for &c in &comp {
+        current.set(c, false);
     }
     if open || rim.is_empty() || (comp.len() as f64) < min_cells {
         return None;
