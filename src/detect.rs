@@ -11,7 +11,7 @@ use crate::cloud::{point_spacing, PointCloud};
 use crate::method::extent::{guard, ExtentConfig, ExtentError};
 use crate::method::fit::{fit, ContactConfig, Fit};
 use crate::method::heightmap::{HeightMap, HeightMapConfig};
-use crate::method::holes::{fill, fill_points, holes, HoleConfig};
+use crate::method::holes::{fill, fill_points, holes, Hole, HoleConfig};
 use crate::method::hypotheses::{hypotheses, Hypothesis};
 use crate::method::scene::{Scene, SceneConfig};
 use crate::method::select::{segment_in, suppress, SegmentConfig, SegmentGrid};
@@ -171,6 +171,9 @@ pub struct Prepared {
     pub map: HeightMap,
     /// The voxelised scene.
     pub scene: Scene,
+    /// The holes of the height map filled before hypotheses and fits
+    /// ([`crate::method::holes`]); their cells are set in `map` and occupied in `scene`.
+    pub filled: Vec<Hole>,
 }
 
 /// Builds the height map and the voxelised scene once for a cloud. The two are
@@ -198,7 +201,11 @@ fn prepare_spaced(
     // voxels occupied in a scene built again with the fill.
     let found = holes(&map, &cfg.holes);
     if found.is_empty() {
-        return Prepared { map, scene };
+        return Prepared {
+            map,
+            scene,
+            filled: found,
+        };
     }
     let fill_at = fill_points(&map, &found, cfg.scene.voxel_size);
     fill(&mut map, &found);
@@ -206,7 +213,11 @@ fn prepare_spaced(
     points.extend_from_slice(&cloud.points);
     points.extend(fill_at);
     let scene = Scene::new(&PointCloud::new(points), &cfg.scene);
-    Prepared { map, scene }
+    Prepared {
+        map,
+        scene,
+        filled: found,
+    }
 }
 
 /// The best unfolded pose at one hypothesis whose root affordance is present, with the

@@ -12,6 +12,7 @@ use nalgebra::{Point2, Point3, Vector3};
 use crate::cloud::PointCloud;
 use crate::detect::{Detection, Outcome, Prepared};
 use crate::method::heightmap::HeightMap;
+use crate::method::holes::Hole;
 use crate::method::hypotheses::Hypothesis;
 use crate::model::hierarchy::Hierarchy;
 use crate::num::{to_i64, to_usize};
@@ -35,6 +36,8 @@ pub const HYPOTHESIS_COLOUR: [u8; 3] = [230, 20, 20];
 
 const BACKGROUND: [u8; 3] = [255, 255, 255];
 const INVALID_CELL: [u8; 3] = [28, 28, 32];
+/// Hatching over height-map cells filled where the scan saw nothing.
+pub const FILL_HATCH: [u8; 3] = [235, 235, 235];
 const INK: [u8; 3] = [20, 20, 20];
 /// Height of the legend strip under the height map, pixels.
 pub const LEGEND_HEIGHT: u32 = 46;
@@ -383,10 +386,14 @@ fn glyph(c: char) -> Option<[u8; 7]> {
 /// of its posed body parts, a circle around its seat and a heading arrow, in the colour
 /// of its finest affordance ([`Legend::colour`]).
 ///
+/// The cells of `filled` (holes the scan did not see, filled at the level round them:
+/// [`crate::method::holes`]) are hatched with [`FILL_HATCH`].
+///
 /// The image is `max(nx * scale, LEGEND_MIN_WIDTH)` wide and `ny * scale +
 /// LEGEND_HEIGHT` tall: a legend strip (height range, affordance colours) is at the bottom.
 pub fn heightmap_image(
     map: &HeightMap,
+    filled: &[Hole],
     hyps: &[Hypothesis],
     detections: &[Detection],
     legend: &Legend,
@@ -409,6 +416,13 @@ pub fn heightmap_image(
             let py = (map.ny - 1 - iy) as i64 * scale as i64;
             img.fill_rect(ix as i64 * scale as i64, py, scale as i64, scale as i64, c);
         }
+    }
+    for &(ix, iy) in filled.iter().flat_map(|h| &h.cells) {
+        let (x0, y0) = (
+            ix as i64 * scale as i64,
+            (map.ny - 1 - iy) as i64 * scale as i64,
+        );
+        hatch(&mut img, x0, y0, scale as i64);
     }
     let s = scale as f64;
     let to_px = |x: f64, y: f64| {
@@ -491,11 +505,22 @@ pub fn heightmap_image(
         }
         img.text(lx, ly, &label, 2, [255; 3]);
     }
-    draw_legend(&mut img, mh as i64, lo, hi, legend);
+    draw_legend(&mut img, mh as i64, (lo, hi), !filled.is_empty(), legend);
     img
 }
 
-fn draw_legend(img: &mut Image, top: i64, lo: f64, hi: f64, legend: &Legend) {
+/// Hatches the `size` x `size` block at `(x0, y0)`: every pixel on every fourth diagonal.
+fn hatch(img: &mut Image, x0: i64, y0: i64, size: i64) {
+    for y in y0..y0 + size {
+        for x in x0..x0 + size {
+            if (x + y) % 4 == 0 {
+                img.set(x, y, FILL_HATCH);
+            }
+        }
+    }
+}
+
+fn draw_legend(img: &mut Image, top: i64, (lo, hi): (f64, f64), filled: bool, legend: &Legend) {
     let y = top + 4;
     let mut x = 4;
     if lo.is_finite() {
@@ -511,7 +536,12 @@ fn draw_legend(img: &mut Image, top: i64, lo: f64, hi: f64, legend: &Legend) {
         0.6,
         HYPOTHESIS_COLOUR,
     );
-    img.text(x + 16, y, "hypothesis", 1, INK);
+    let x = img.text(x + 16, y, "hypothesis", 1, INK) + 8;
+    if filled {
+        img.fill_rect(x, y - 1, 9, 9, viridis(0.5));
+        hatch(img, x, y - 1, 9);
+        img.text(x + 12, y, "unseen - filled", 1, INK);
+    }
     let mut y = top + 20;
     let mut x = 4;
     for (id, c) in legend.entries() {
@@ -737,6 +767,7 @@ pub fn inspect_png(
     let map = &prepared.map;
     let top = heightmap_image(
         map,
+        &prepared.filled,
         hyps,
         &outcome.detections,
         legend,
@@ -811,7 +842,7 @@ mod tests {
     #[test]
     fn heightmap_image_size_colours_and_orientation() {
         let m = map_3x2();
-        let img = heightmap_image(&m, &[], &[], &Legend::default(), 10);
+        let img = heightmap_image(&m, &[], &[], &[], &Legend::default(), 10);
         assert_eq!(img.width, LEGEND_MIN_WIDTH);
         assert_eq!(img.height, 20 + LEGEND_HEIGHT);
         assert_eq!(img.rgb.len(), 3 * (img.width * img.height) as usize);
@@ -828,9 +859,33 @@ mod tests {
         // A wide map is as wide as its cells.
         let wide = HeightMap::from_dense(m.x0, m.y0, m.cell, 40, m.ny, &[Some(0.3); 80]);
         assert_eq!(
-            heightmap_image(&wide, &[], &[], &Legend::default(), 8).width,
+            heightmap_image(&wide, &[], &[], &[], &Legend::default(), 8).width,
             320
         );
+    }
+
+    #[test]
+    fn filled_cells_are_hatched_and_named_in_the_legend() {
+        let m = HeightMap::from_dense(0.0, 0.0, 0.1, 4, 2, &[Some(0.5); 8]);
+        let hole = Hole {
+            cells: vec![(1, 0)],
+            height: 0.5,
+        };
+        let plain = heightmap_image(&m, &[], &[], &[], &Legend::default(), 10);
+        let img = heightmap_image(&m, &[hole], &[], &[], &Legend::default(), 10);
+        // Cell (1, 0) covers pixels x 10-19, y 10-19: hatched on its diagonals (x + y a
+        // multiple of 4), its colour between them; cell (2, 0) as without the fill.
+        assert_eq!(img.pixel(12, 12), FILL_HATCH);
+        assert_eq!(img.pixel(13, 12), plain.pixel(13, 12));
+        assert_eq!(img.pixel(24, 12), plain.pixel(24, 12));
+        assert_ne!(plain.pixel(12, 12), FILL_HATCH);
+        // The legend names the hatching only when something was filled.
+        let legend_row = |i: &Image| {
+            (0..i.width)
+                .map(|x| i.pixel(x, 20 + 4 + 3))
+                .collect::<Vec<_>>()
+        };
+        assert_ne!(legend_row(&img), legend_row(&plain));
     }
 
     fn is_red(c: [u8; 3]) -> bool {
@@ -843,6 +898,7 @@ mod tests {
         // Heading 0 (+x): red to the right of the centre (45, 45), not to the left.
         let img = heightmap_image(
             &m,
+            &[],
             &[hyp((4, 4), &m, Some(0.0))],
             &[],
             &Legend::default(),
@@ -853,6 +909,7 @@ mod tests {
         // Heading +90 deg (+y): red above the centre in the image.
         let img = heightmap_image(
             &m,
+            &[],
             &[hyp((4, 4), &m, Some(std::f64::consts::FRAC_PI_2))],
             &[],
             &Legend::default(),
@@ -861,7 +918,14 @@ mod tests {
         assert!(is_red(img.pixel(44, 37)) || is_red(img.pixel(45, 37)));
         assert!(!is_red(img.pixel(45, 53)));
         // No heading: a dot on the centre.
-        let img = heightmap_image(&m, &[hyp((4, 4), &m, None)], &[], &Legend::default(), 10);
+        let img = heightmap_image(
+            &m,
+            &[],
+            &[hyp((4, 4), &m, None)],
+            &[],
+            &Legend::default(),
+            10,
+        );
         assert!(is_red(img.pixel(45, 45)));
         assert!(!is_red(img.pixel(52, 45)));
     }
@@ -911,7 +975,7 @@ mod tests {
         assert_eq!(own.colour(&strs(&["sitting"])), OTHER_AFFORDANCE);
         let m = HeightMap::from_dense(-0.5, -0.5, 0.05, 20, 20, &[Some(0.0); 400]);
         let d = detection(&["sitting", "backrest"], vec![]);
-        let img = heightmap_image(&m, &[], &[d], &legend, 10);
+        let img = heightmap_image(&m, &[], &[], &[d], &legend, 10);
         // Seat at the world origin = pixel (100, 100); the heading arrow runs to +x.
         let c = img.pixel(100 + 40, 100);
         assert_eq!(c, colour("backrest"), "{c:?}");
