@@ -320,6 +320,30 @@ fn a_wooden_armchair_with_arm_rails_on_its_front_posts_gives_sitting_and_armrest
     }
 }
 
+/// A camera beside a sofa's arm cannot see the seat behind the arm: the end seat, the one
+/// place where the arm is used, was a hole in the height map with nothing in the scene
+/// to sit on. The far end is out of view (the view is cut at y = 0.3 m).
+#[test]
+fn the_seat_a_sofa_arm_hides_from_the_camera_gives_the_armrest() {
+    let two = SofaParams {
+        seats: 2,
+        ..SofaParams::default()
+    };
+    let scene = scene_mesh(&[sofa(&two)], true);
+    for (x, y) in [(1.0, -2.2), (1.6, -2.0)] {
+        let cam = camera::Camera::looking_at(Point3::new(x, y, 1.2), Point3::new(0.0, -0.3, 0.43));
+        let mut view = camera::render_view(&scene, &cam, 3).0;
+        view.points.retain(|p| p.y < 0.3);
+        let o = run(&view, 1.75);
+        assert!(
+            affords(&o).iter().any(|a| a == "armrest"),
+            "camera at ({x}, {y}): {:?} {:?}",
+            affords(&o),
+            o.stats
+        );
+    }
+}
+
 /// Issue 11: in a room scan the highest point of every cell is the ceiling, which left
 /// the paper's height map without a single seat.
 #[test]
