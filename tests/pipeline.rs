@@ -341,6 +341,13 @@ fn the_seat_a_sofa_arm_hides_from_the_camera_gives_the_armrest() {
             affords(&o),
             o.stats
         );
+        // The same outcome on one thread as on the pool.
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| run(&view, 1.75));
+        assert_eq!(one, o, "camera at ({x}, {y})");
     }
 }
 
