@@ -15,9 +15,10 @@
 //! furniture (the seat of a chair seen from behind) is not filled, nor one whose rim is
 //! the floor.
 //!
-//! The fill is points on the scene's voxel grid at the rim's level over the hole's cells,
-//! added to the cloud the height map and the scene are built from (not to the segmented
-//! points); this is not in the paper.
+//! The fill ([`fill`], [`fill_points`]) sets the hole's cells in the height map to the
+//! middle of the rim cells at the level, and adds points on the scene's voxel grid over
+//! them at that height to the cloud the scene is built from (not to the segmented points).
+//! This is not in the paper.
 
 use std::collections::HashSet;
 
@@ -62,7 +63,7 @@ impl Default for HoleConfig {
             // The lowest tenth of the rim may be noise or a peek at the floor through a
             // gap; above it, the lowest surface round the hole is the one it continues.
             rim_quantile: 0.1,
-            // 0.05 m: one height-map cell; cushions and seat edges vary 1-3 cm.
+            // 0.05 m: cushions and seat edges vary 1-3 cm, a duvet's folds up to 5.
             rim_tolerance: 0.05,
             // 0.3: a hole behind an arm is closed by the seat on one or two sides and by
             // the arm and the back, higher, on the others.
