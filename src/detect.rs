@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use crate::cloud::{point_spacing, PointCloud};
 use crate::method::extent::{guard, ExtentConfig, ExtentError};
 use crate::method::fit::{fit, ContactConfig, Fit};
-use crate::method::heightmap::{HeightMap, HeightMapConfig};
+use crate::method::heightmap::{HeightMap, HeightMapConfig, Spacing};
 use crate::method::holes::{fill, fill_points, holes, Hole, HoleConfig};
 use crate::method::hypotheses::{hypotheses, Hypothesis};
 use crate::method::scene::{Scene, SceneConfig};
@@ -180,20 +180,16 @@ pub struct Prepared {
 /// independent (each reads only `cloud` and its own config), so they are built side by
 /// side on rayon's pool: the same grids whatever the thread count.
 pub fn prepare(cloud: &PointCloud, cfg: &DetectConfig) -> Prepared {
-    prepare_spaced(cloud, cfg, None)
+    prepare_spaced(cloud, cfg, Spacing::Measure)
 }
 
 /// [`prepare`], with the cloud's point spacing given when already measured
 /// ([`HeightMap::from_cloud_spaced`]), else measured by the height map.
-fn prepare_spaced(
-    cloud: &PointCloud,
-    cfg: &DetectConfig,
-    spacing: Option<Option<f64>>,
-) -> Prepared {
+fn prepare_spaced(cloud: &PointCloud, cfg: &DetectConfig, spacing: Spacing) -> Prepared {
     let (mut map, scene) = rayon::join(
         || match spacing {
-            Some(s) => HeightMap::from_cloud_spaced(cloud, &cfg.heightmap, s),
-            None => HeightMap::from_cloud(cloud, &cfg.heightmap),
+            Spacing::Given(s) => HeightMap::from_cloud_spaced(cloud, &cfg.heightmap, s),
+            Spacing::Measure => HeightMap::from_cloud(cloud, &cfg.heightmap),
         },
         || Scene::new(cloud, &cfg.scene),
     );
@@ -283,8 +279,8 @@ pub fn prepare_guarded(
         specks
     };
     Ok(match specks {
-        Some((surface, _)) => prepare_spaced(&surface, cfg, Some(spacing)),
-        None => prepare_spaced(&kept.cloud, cfg, Some(spacing)),
+        Some((surface, _)) => prepare_spaced(&surface, cfg, Spacing::Given(spacing)),
+        None => prepare_spaced(&kept.cloud, cfg, Spacing::Given(spacing)),
     })
 }
 

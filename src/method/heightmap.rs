@@ -94,6 +94,17 @@ const NO_TILE: usize = usize::MAX;
 /// well above a task's overhead on rayon's pool. The map does not depend on it.
 const PIECE: usize = 8 * 1024;
 
+/// The cloud's point spacing ([`point_spacing`]) for building a height map: measured by
+/// the build, or given by a caller that measured it already (of the points the cloud was
+/// cut from); `Given(None)` is a cloud too small to have one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Spacing {
+    /// Measured by the build, beside the tiles' own spacings.
+    Measure,
+    /// Given.
+    Given(Option<f64>),
+}
+
 /// A height map over the x-y plane (metres, z up): `nx` x `ny` square cells from the corner
 /// `(x0, y0)`, stored in tiles of [`TILE`] x [`TILE`] cells of which only those holding a
 /// point are kept.
@@ -224,7 +235,7 @@ impl HeightMap {
     /// that far above the floor sees only a roof and is invalid. Each point counts in every
     /// cell whose centre is within `cfg.sample_reach` point spacings of it. An empty cloud gives an empty map.
     pub fn from_cloud(cloud: &PointCloud, cfg: &HeightMapConfig) -> HeightMap {
-        HeightMap::build(cloud, cfg, true, PIECE, None)
+        HeightMap::build(cloud, cfg, true, PIECE, Spacing::Measure)
     }
 
     /// [`HeightMap::from_cloud`] with the cloud's point spacing given rather than measured:
@@ -236,20 +247,20 @@ impl HeightMap {
         cfg: &HeightMapConfig,
         spacing: Option<f64>,
     ) -> HeightMap {
-        HeightMap::build(cloud, cfg, true, PIECE, Some(spacing))
+        HeightMap::build(cloud, cfg, true, PIECE, Spacing::Given(spacing))
     }
 
     /// [`HeightMap::from_cloud`]; with `skip_dense` the tiles whose spacing gives a reach
     /// under half a cell are not measured exactly (the same map, bit for bit: see below).
     /// The per-point passes run in parallel pieces of `piece` points (at least 1), merged
     /// in the points' order: the same map whatever `piece` and the thread count. The
-    /// cloud's spacing is `spacing` when given, else measured.
+    /// cloud's spacing is `spacing` ([`Spacing`]).
     fn build(
         cloud: &PointCloud,
         cfg: &HeightMapConfig,
         skip_dense: bool,
         piece: usize,
-        spacing: Option<Option<f64>>,
+        spacing: Spacing,
     ) -> HeightMap {
         let piece = piece.max(1);
         let cell = cfg.cell;
@@ -538,7 +549,7 @@ fn reaches(
     cfg: &HeightMapConfig,
     skip_dense: bool,
     piece: usize,
-    spacing: Option<Option<f64>>,
+    spacing: Spacing,
 ) -> Vec<f64> {
     let cell = cfg.cell;
     // Every other cell's centre is at least half a cell from the point along x or y:
@@ -573,8 +584,8 @@ fn reaches(
     };
     // Independent measures of the same points, side by side.
     let (global, tiles) = match spacing {
-        Some(global) => (global, measure(skip_dense)),
-        None => rayon::join(|| point_spacing(cloud), || measure(skip_dense)),
+        Spacing::Given(global) => (global, measure(skip_dense)),
+        Spacing::Measure => rayon::join(|| point_spacing(cloud), || measure(skip_dense)),
     };
     let no_reach = |g: f64| dense(g) && to_isize((reach_of(g) / cell).ceil()) != 1;
     let tiles = if skip_dense && global.is_some_and(no_reach) {
@@ -1040,7 +1051,13 @@ mod tests {
                 pts.push(Point3::new(x, 0.1 + k as f64 * 1e-4, 0.45));
             }
             let cloud = PointCloud::new(pts);
-            let one = bits(&HeightMap::build(&cloud, &cfg, true, usize::MAX, None));
+            let one = bits(&HeightMap::build(
+                &cloud,
+                &cfg,
+                true,
+                usize::MAX,
+                Spacing::Measure,
+            ));
             let valid = one.1.iter().flatten().count();
             assert!(
                 valid > 50 && cloud.len() > 3000,
@@ -1050,7 +1067,7 @@ mod tests {
             for threads in [1, 2] {
                 for piece in [1, 7, 1000] {
                     let m = on_threads(threads, || {
-                        HeightMap::build(&cloud, &cfg, true, piece, None)
+                        HeightMap::build(&cloud, &cfg, true, piece, Spacing::Measure)
                     });
                     assert!(
                         bits(&m) == one,
@@ -1111,8 +1128,8 @@ mod tests {
             }
             let cloud = PointCloud::new(pts);
             for cfg in &configs {
-                let fast = HeightMap::build(&cloud, cfg, true, PIECE, None);
-                let exact = HeightMap::build(&cloud, cfg, false, PIECE, None);
+                let fast = HeightMap::build(&cloud, cfg, true, PIECE, Spacing::Measure);
+                let exact = HeightMap::build(&cloud, cfg, false, PIECE, Spacing::Measure);
                 assert_eq!(
                     (fast.x0, fast.y0, fast.nx, fast.ny, fast.tiles_x),
                     (exact.x0, exact.y0, exact.nx, exact.ny, exact.tiles_x)
