@@ -6,7 +6,7 @@
 //! sampled from its surfaces, about 1M points) and `big_floor` (one chair on a
 //! 200 m x 200 m floor); see `afford_synth::scenes`.
 //!
-//! Every stage alone (PLY read, height map, hypotheses, scene, the distance field over
+//! Every stage alone (PLY read, height map, the holes' search, hypotheses, scene, the distance field over
 //! the whole occupied box, fitting, unfolding, segmentation) and the default run end to
 //! end (sitting and lying, one shared scene). The scene stage voxelises and, for a box
 //! of at most 2^25 cells, runs the field's passes along x and y; the pass along z (per
@@ -41,6 +41,10 @@ fn stages(c: &mut Criterion) {
         g.bench_function("load_ply", |b| b.iter(|| cloud::load(&path).unwrap()));
         g.bench_function("heightmap", |b| {
             b.iter(|| afford::method::heightmap::HeightMap::from_cloud(&cloud, &cfg.heightmap))
+        });
+        let map = afford::method::heightmap::HeightMap::from_cloud(&cloud, &cfg.heightmap);
+        g.bench_function("holes", |b| {
+            b.iter(|| afford::method::holes::holes(&map, &cfg.holes).len())
         });
         g.bench_function("scene", |b| b.iter(|| Scene::new(&cloud, &cfg.scene)));
         if name != "big_floor" {

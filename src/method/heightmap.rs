@@ -494,6 +494,26 @@ impl HeightMap {
         self.heights[i] = Some(height);
     }
 
+    /// The cells `(ix, iy)` whose height is at least `min` metres, tile by tile (tiles in
+    /// row-major order, cells row-major within a tile): one pass over the stored cells.
+    pub fn cells_at_least(&self, min: f64) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        for (t, &slot) in self.tiles.iter().enumerate() {
+            if slot == NO_TILE {
+                continue;
+            }
+            let (x0, y0) = ((t % self.tiles_x) * TILE, (t / self.tiles_x) * TILE);
+            let cells = &self.heights[slot * TILE * TILE..(slot + 1) * TILE * TILE];
+            for (i, h) in cells.iter().enumerate() {
+                let (ix, iy) = (x0 + i % TILE, y0 + i / TILE);
+                if h.is_some_and(|h| h >= min) && ix < self.nx && iy < self.ny {
+                    out.push((ix, iy));
+                }
+            }
+        }
+        out
+    }
+
     /// The heights of the valid cells, in no particular order.
     pub fn valid_heights(&self) -> impl Iterator<Item = f64> + '_ {
         self.heights.iter().flatten().copied()
@@ -1024,6 +1044,25 @@ mod tests {
     /// cells round), stacked layers (columns of several heights) and a run of points
     /// stepping back and forth across a tile border (spans of tiles that change point by
     /// point).
+    #[test]
+    fn cells_at_least_are_the_valid_cells_that_high() {
+        // 11 x 9 cells (tiles cut by the map's edge), heights varying, some invalid.
+        let (nx, ny) = (11, 9);
+        let h: Vec<Option<f64>> = (0..nx * ny)
+            .map(|i| (i % 7 != 3).then_some((i % 5) as f64 * 0.1))
+            .collect();
+        let m = HeightMap::from_dense(0.0, 0.0, 0.05, nx, ny, &h);
+        let mut got = m.cells_at_least(0.2);
+        got.sort_unstable();
+        let mut want: Vec<(usize, usize)> = (0..ny)
+            .flat_map(|iy| (0..nx).map(move |ix| (ix, iy)))
+            .filter(|&(ix, iy)| h[iy * nx + ix].is_some_and(|v| v >= 0.2))
+            .collect();
+        want.sort_unstable();
+        assert!(!want.is_empty() && want.len() < nx * ny);
+        assert_eq!(got, want);
+    }
+
     #[test]
     fn pieces_build_the_map_of_one_loop() {
         use crate::cellhash::on_threads;

@@ -124,7 +124,8 @@ impl Bits {
 
 /// The enclosed holes of `map` that `cfg` fills. Deterministic: holes are found from the
 /// valid cells at least `cfg.min_level` high (every hole filled has such cells in its
-/// rim), in row-major order. Each invalid cell is visited at most once: a search that
+/// rim), in the order of [`HeightMap::cells_at_least`] (which holes are found does not
+/// depend on it). Each invalid cell is visited at most once: a search that
 /// meets a cell an earlier one found open is open too. Memory: two bits per cell.
 pub fn holes(map: &HeightMap, cfg: &HoleConfig) -> Vec<Hole> {
     let max_cells = to_usize((cfg.max_area / (map.cell * map.cell)).floor());
@@ -134,27 +135,19 @@ pub fn holes(map: &HeightMap, cfg: &HoleConfig) -> Vec<Hole> {
     let mut out = Vec::new();
     let inside =
         |x: isize, y: isize| x >= 0 && y >= 0 && (x as usize) < map.nx && (y as usize) < map.ny;
-    for iy in 0..map.ny {
-        for ix in map.stored_columns(iy, 1).collect::<Vec<_>>() {
-            if map
-                .get(ix as isize, iy as isize)
-                .is_none_or(|h| h < cfg.min_level)
-            {
+    for (ix, iy) in map.cells_at_least(cfg.min_level) {
+        for (dx, dy) in SIDES {
+            let (sx, sy) = (ix as isize + dx, iy as isize + dy);
+            if !inside(sx, sy) || map.get(sx, sy).is_some() {
                 continue;
             }
-            for (dx, dy) in SIDES {
-                let (sx, sy) = (ix as isize + dx, iy as isize + dy);
-                if !inside(sx, sy) || map.get(sx, sy).is_some() {
-                    continue;
-                }
-                let start = (sx as usize, sy as usize);
-                if seen.get(start) {
-                    continue;
-                }
-                let marks = (&mut seen, &mut current);
-                if let Some(hole) = flood(map, start, (min_cells, max_cells), marks, cfg) {
-                    out.push(hole);
-                }
+            let start = (sx as usize, sy as usize);
+            if seen.get(start) {
+                continue;
+            }
+            let marks = (&mut seen, &mut current);
+            if let Some(hole) = flood(map, start, (min_cells, max_cells), marks, cfg) {
+                out.push(hole);
             }
         }
     }
