@@ -20,7 +20,7 @@
 //! them at that height to the cloud the scene is built from (not to the segmented points).
 //! This is not in the paper.
 
-use std::collections::HashSet;
+use std::collections::HashMap;
 
 use nalgebra::Point3;
 
@@ -30,9 +30,9 @@ use crate::num::to_usize;
 /// When a hole is filled.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HoleConfig {
-    /// Largest hole filled, square metres.
+    /// Largest hole filled, square metres (the whole height-map cells within it).
     pub max_area: f64,
-    /// Smallest hole filled, square metres: smaller ones are gaps in the sampling, which
+    /// Smallest hole filled, square metres (rounded to whole cells): smaller ones are gaps in the sampling, which
     /// the height map's reach and the hypotheses' tolerance of invalid cells deal with.
     pub min_area: f64,
     /// The rim's level is this quantile of its cells' heights (0 the lowest).
@@ -93,6 +93,16 @@ pub struct Hole {
 /// The four cells beside a cell, in a fixed order.
 const SIDES: [(isize, isize); 4] = [(1, 0), (-1, 0), (0, 1), (0, -1)];
 
+/// The cell beside `(x, y)` one step `(dx, dy)` away, if it is inside `map`.
+fn beside(
+    map: &HeightMap,
+    (x, y): (usize, usize),
+    (dx, dy): (isize, isize),
+) -> Option<(usize, usize)> {
+    let (x, y) = (x.checked_add_signed(dx)?, y.checked_add_signed(dy)?);
+    (x < map.nx && y < map.ny).then_some((x, y))
+}
+
 /// One bit per cell of a height map.
 struct Bits {
     nx: usize,
@@ -128,21 +138,22 @@ impl Bits {
 /// depend on it). Each invalid cell is visited at most once: a search that
 /// meets a cell an earlier one found open is open too. Memory: two bits per cell.
 pub fn holes(map: &HeightMap, cfg: &HoleConfig) -> Vec<Hole> {
-    let max_cells = to_usize((cfg.max_area / (map.cell * map.cell)).floor());
-    let min_cells = cfg.min_area / (map.cell * map.cell) - 1e-9;
+    // Areas in cells: at most the whole cells within `max_area`, at least `min_area`
+    // rounded to whole cells.
+    let cells = |area: f64| area / (map.cell * map.cell);
+    let (min_cells, max_cells) = (
+        to_usize(cells(cfg.min_area).round()),
+        to_usize(cells(cfg.max_area).floor()),
+    );
     let mut seen = Bits::new(map);
     let mut current = Bits::new(map);
     let mut out = Vec::new();
-    let inside =
-        |x: isize, y: isize| x >= 0 && y >= 0 && (x as usize) < map.nx && (y as usize) < map.ny;
     for (ix, iy) in map.cells_at_least(cfg.min_level) {
-        for (dx, dy) in SIDES {
-            let (sx, sy) = (ix as isize + dx, iy as isize + dy);
-            if !inside(sx, sy) || map.get(sx, sy).is_some() {
+        for side in SIDES {
+            let Some(start) = beside(map, (ix, iy), side) else {
                 continue;
-            }
-            let start = (sx as usize, sy as usize);
-            if seen.get(start) {
+            };
+            if map.get(start.0 as isize, start.1 as isize).is_some() || seen.get(start) {
                 continue;
             }
             let marks = (&mut seen, &mut current);
@@ -160,28 +171,27 @@ pub fn holes(map: &HeightMap, cfg: &HoleConfig) -> Vec<Hole> {
 fn flood(
     map: &HeightMap,
     start: (usize, usize),
-    (min_cells, max_cells): (f64, usize),
+    (min_cells, max_cells): (usize, usize),
     (seen, current): (&mut Bits, &mut Bits),
     cfg: &HoleConfig,
 ) -> Option<Hole> {
     let mut comp = vec![start];
     seen.set(start, true);
     current.set(start, true);
-    let mut rim: HashSet<(usize, usize)> = HashSet::new();
+    // The valid cells beside the component, with their heights.
+    let mut rim: HashMap<(usize, usize), f64> = HashMap::new();
     let mut open = false;
     let mut next = 0;
     'grow: while next < comp.len() {
         let (cx, cy) = comp[next];
         next += 1;
-        for (dx, dy) in SIDES {
-            let (x, y) = (cx as isize + dx, cy as isize + dy);
-            if x < 0 || y < 0 || x as usize >= map.nx || y as usize >= map.ny {
+        for side in SIDES {
+            let Some(c) = beside(map, (cx, cy), side) else {
                 open = true;
                 break 'grow;
-            }
-            let c = (x as usize, y as usize);
-            if map.get(x, y).is_some() {
-                rim.insert(c);
+            };
+            if let Some(h) = map.get(c.0 as isize, c.1 as isize) {
+                rim.insert(c, h);
             } else if current.get(c) {
                 continue;
             } else if seen.get(c) {
@@ -202,13 +212,10 @@ fn flood(
     for &c in &comp {
         current.set(c, false);
     }
-    if open || rim.is_empty() || (comp.len() as f64) < min_cells {
+    if open || rim.is_empty() || comp.len() < min_cells {
         return None;
     }
-    let mut heights: Vec<f64> = rim
-        .iter()
-        .filter_map(|&(x, y)| map.get(x as isize, y as isize))
-        .collect();
+    let mut heights: Vec<f64> = rim.into_values().collect();
     heights.sort_by(f64::total_cmp);
     let q = to_usize((cfg.rim_quantile * (heights.len() - 1) as f64).round());
     let level = heights[q.min(heights.len() - 1)];
