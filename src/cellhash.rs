@@ -4,13 +4,16 @@
 //! use for cells of a point cloud, and its seeds are random: no result may depend on the
 //! maps' order, only their look-ups (each user says why its results do not). Also the
 //! connected components of occupied cubes that the extent guard and the specks stage
-//! both find ([`component_roots`]).
+//! both find ([`component_roots`]), and the box of cubes both index densely ([`CubeBox`]).
 
 use std::collections::{HashMap, HashSet};
 use std::hash::{BuildHasherDefault, Hasher};
 use std::ops::Range;
 
+use nalgebra::Point3;
 use rayon::prelude::*;
+
+use crate::num::floor_i64;
 
 /// A hash map keyed by cells, hashed by [`CellHasher`].
 pub(crate) type CellMap<K, V> = HashMap<K, V, BuildHasherDefault<CellHasher>>;
@@ -45,6 +48,95 @@ impl Hasher for CellHasher {
     fn write_u64(&mut self, i: u64) {
         const K: u64 = 0x517c_c1b7_2722_0a95;
         self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(K);
+    }
+}
+
+/// The box of the cubes of edge `cell` metres (cube `k` holds the points whose
+/// coordinates `c` have `floor(c / cell) = k` along each axis) that hold a set of points:
+/// its least cube and its extent in cubes along x, y and z. A cube index is monotone in
+/// its coordinate, so the box comes from the points' least and greatest coordinates.
+/// Cubes inside it are indexed x-major: offset `(x, y, z)` at `(x * ny + y) * nz + z`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct CubeBox {
+    /// The least cube.
+    pub(crate) lo: [i64; 3],
+    /// Cubes along x, y and z.
+    pub(crate) dims: [usize; 3],
+}
+
+impl CubeBox {
+    /// The box of the cubes of `points` (the bounds reduced in parallel pieces of at least
+    /// `piece` points), or `None` without points, for a `cell` not positive, a coordinate
+    /// not finite, or a span of more cubes than `usize` counts.
+    pub(crate) fn of(points: &[Point3<f64>], cell: f64, piece: usize) -> Option<CubeBox> {
+        let (lo, hi) = points
+            .par_iter()
+            .with_min_len(piece)
+            .map(|p| (p.coords, p.coords))
+            .reduce_with(|(lo, hi), (l, h)| (lo.inf(&l), hi.sup(&h)))?;
+        if !(cell > 0.0 && lo.iter().chain(hi.iter()).all(|c| c.is_finite())) {
+            return None;
+        }
+        let (lo, hi) = (
+            Self::cube_of(&lo.into(), cell),
+            Self::cube_of(&hi.into(), cell),
+        );
+        let mut dims = [0usize; 3];
+        for a in 0..3 {
+            dims[a] = usize::try_from(hi[a].checked_sub(lo[a])?)
+                .ok()?
+                .checked_add(1)?;
+        }
+        Some(CubeBox { lo, dims })
+    }
+
+    /// The cube of edge `cell` holding `p`.
+    pub(crate) fn cube_of(p: &Point3<f64>, cell: f64) -> [i64; 3] {
+        [p.x, p.y, p.z].map(|c| floor_i64(c / cell))
+    }
+
+    /// Cubes in the box, or `None` past `usize`.
+    pub(crate) fn len(&self) -> Option<usize> {
+        self.dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d))
+    }
+
+    /// The offset of cube `k` in the box, if inside.
+    pub(crate) fn offset(&self, k: [i64; 3]) -> Option<[usize; 3]> {
+        let mut o = [0usize; 3];
+        for a in 0..3 {
+            o[a] = usize::try_from(k[a].checked_sub(self.lo[a])?).ok()?;
+            if o[a] >= self.dims[a] {
+                return None;
+            }
+        }
+        Some(o)
+    }
+
+    /// The index of offset `o` (inside the box).
+    pub(crate) fn index(&self, [x, y, z]: [usize; 3]) -> usize {
+        (x * self.dims[1] + y) * self.dims[2] + z
+    }
+
+    /// The offset of index `i` (inside the box).
+    pub(crate) fn offset_of_index(&self, i: usize) -> [usize; 3] {
+        let [_, ny, nz] = self.dims;
+        [i / (ny * nz), i / nz % ny, i % nz]
+    }
+
+    /// The offset one step `(dx, dy, dz)` from offset `o`, if inside the box.
+    pub(crate) fn step(&self, o: [usize; 3], (dx, dy, dz): (i64, i64, i64)) -> Option<[usize; 3]> {
+        let mut n = [0usize; 3];
+        for (a, d) in [dx, dy, dz].into_iter().enumerate() {
+            n[a] = o[a]
+                .checked_add_signed(isize::try_from(d).ok()?)
+                .filter(|&v| v < self.dims[a])?;
+        }
+        Some(n)
+    }
+
+    /// The cube at offset `o` (inside the box: the offsets fit `i64`, as its span did).
+    pub(crate) fn cube(&self, o: [usize; 3]) -> [i64; 3] {
+        [0, 1, 2].map(|a| self.lo[a] + i64::try_from(o[a]).unwrap_or(0))
     }
 }
 
@@ -167,6 +259,35 @@ pub(crate) fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_cube_box_indexes_its_cubes_and_steps_inside_it() {
+        let pts = [
+            Point3::new(-0.25, 0.0, 0.31),
+            Point3::new(0.29, -0.11, 0.0),
+            Point3::new(0.05, 0.39, 0.12),
+        ];
+        let b = CubeBox::of(&pts, 0.1, 1).unwrap();
+        assert_eq!(b.lo, [-3, -2, 0]);
+        assert_eq!(b.dims, [6, 6, 4]);
+        assert_eq!(b.len(), Some(144));
+        for p in &pts {
+            let k = CubeBox::cube_of(p, 0.1);
+            let o = b.offset(k).unwrap();
+            assert_eq!(b.offset_of_index(b.index(o)), o);
+            assert_eq!(b.cube(o), k);
+        }
+        assert_eq!(b.offset([3, 0, 0]), None);
+        assert_eq!(b.step([0, 0, 0], (0, 0, -1)), None);
+        assert_eq!(b.step([0, 0, 0], (1, 1, 1)), Some([1, 1, 1]));
+        assert_eq!(b.step([5, 5, 3], (1, 0, 0)), None);
+        assert_eq!(CubeBox::of(&pts, 0.0, 1), None);
+        assert_eq!(CubeBox::of(&[], 0.1, 1), None);
+        assert_eq!(
+            CubeBox::of(&[Point3::new(f64::NAN, 0.0, 0.0)], 0.1, 1),
+            None
+        );
+    }
 
     #[test]
     fn the_offsets_and_their_opposites_are_the_26_neighbours() {

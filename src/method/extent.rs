@@ -22,10 +22,9 @@ use nalgebra::Point3;
 
 use rayon::prelude::*;
 
-use crate::cellhash::{component_roots, key_runs, offset_key, CellMap};
+use crate::cellhash::{component_roots, key_runs, offset_key, CellMap, CubeBox};
 use crate::cloud::PointCloud;
 use crate::detect::DetectConfig;
-use crate::num::floor_i64;
 
 /// Limits of the guard stage. Defaults carry their reasons.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -228,43 +227,14 @@ const BULK_PIECE: usize = 64 * 1024;
 /// each point's cube as an index into the box (x-major), the points per cube counted in
 /// parallel pieces and summed, the occupied cubes joined through the box.
 fn dense_bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Option<Vec<bool>> {
-    let cube = |p: &Point3<f64>| p.coords.map(|c| floor_i64(c / cell));
-    // A cube index is monotone in its coordinate (a division by a positive `cell`, then a
-    // floor): the box from the least and greatest coordinates.
-    let (lo, hi) = points
-        .par_iter()
-        .with_min_len(BULK_PIECE)
-        .map(|p| (p.coords, p.coords))
-        .reduce_with(|(lo, hi), (l, h)| (lo.inf(&l), hi.sup(&h)))?;
-    if !(cell > 0.0 && lo.iter().chain(hi.iter()).all(|c| c.is_finite())) {
-        return None;
-    }
-    let (lo, hi) = (
-        lo.map(|c| floor_i64(c / cell)),
-        hi.map(|c| floor_i64(c / cell)),
-    );
-    let mut dims = [0usize; 3];
-    for a in 0..3 {
-        dims[a] = usize::try_from(hi[a].checked_sub(lo[a])?)
-            .ok()?
-            .checked_add(1)?;
-    }
-    let cells = dims
-        .iter()
-        .try_fold(1usize, |n, &d| n.checked_mul(d))
+    let cubes = CubeBox::of(points, cell, BULK_PIECE)?;
+    let cells = cubes
+        .len()
         .filter(|&n| n <= DENSE_BULK_CUBES && n <= points.len())?;
-    let [_, ny, nz] = dims;
-    // Inside the box by the monotony above; `None` (then hashed) were it not.
+    // Inside the box by its monotony; `None` (then hashed) were it not.
     let index = |p: &Point3<f64>| -> Option<usize> {
-        let k = cube(p);
-        let mut o = [0usize; 3];
-        for a in 0..3 {
-            o[a] = usize::try_from(k[a].checked_sub(lo[a])?).ok()?;
-            if o[a] >= dims[a] {
-                return None;
-            }
-        }
-        Some((o[0] * ny + o[1]) * nz + o[2])
+        let o = cubes.offset(CubeBox::cube_of(p, cell))?;
+        Some(cubes.index(o))
     };
     let of_point: Vec<u32> = points
         .par_iter()
@@ -296,16 +266,11 @@ fn dense_bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Option<Vec<bool>
         return None;
     }
     // The regions: components of the occupied cubes, numbered by their place in the box.
-    let step = |v: usize, d: i64, n: usize| {
-        v.checked_add_signed(isize::try_from(d).ok()?)
-            .filter(|&w| w < n)
-    };
-    let roots = component_roots(cells, |i, (dx, dy, dz)| {
+    let roots = component_roots(cells, |i, d| {
         if count[i] == 0 {
             return None;
         }
-        let (x, y, z) = (i / (ny * nz), i / nz % ny, i % nz);
-        let j = (step(x, dx, dims[0])? * ny + step(y, dy, ny)?) * nz + step(z, dz, nz)?;
+        let j = cubes.index(cubes.step(cubes.offset_of_index(i), d)?);
         (count[j] != 0).then_some(j)
     });
     let mut region = vec![0usize; cells];
@@ -335,10 +300,7 @@ fn hashed_bulk(points: &[Point3<f64>], cell: f64, share: f64) -> Vec<bool> {
     // The cubes of runs of points in one cube (as a depth image's rows give), found in
     // parallel pieces: each cube is looked up once per run, as one loop over the points
     // that remembers the last cube does.
-    let runs = key_runs(points, |p| {
-        let k = p.coords.map(|c| floor_i64(c / cell));
-        Some([k.x, k.y, k.z])
-    });
+    let runs = key_runs(points, |p| Some(CubeBox::cube_of(p, cell)));
     // Cells numbered in the points' order and only looked up: the map's order is unused.
     let mut cells: CellMap<[i64; 3], usize> = CellMap::default();
     let mut keys: Vec<[i64; 3]> = Vec::new();
@@ -408,8 +370,7 @@ mod tests {
         let of_point: Vec<usize> = points
             .iter()
             .map(|p| {
-                let k = p.coords.map(|c| floor_i64(c / cell));
-                let k = [k.x, k.y, k.z];
+                let k = CubeBox::cube_of(p, cell);
                 let n = cells.len();
                 *cells.entry(k).or_insert_with(|| {
                     keys.push(k);

@@ -22,9 +22,8 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use nalgebra::Point3;
 use rayon::prelude::*;
 
-use crate::cellhash::{component_roots, offset_key, CellMap, CellSet};
+use crate::cellhash::{component_roots, offset_key, CellMap, CellSet, CubeBox};
 use crate::cloud::PointCloud;
-use crate::num::floor_i64;
 
 /// For each point of `points`, whether it belongs to a speck: a 26-connected component of
 /// at most `max_cubes` occupied cubes of edge `cell` metres (see the module
@@ -32,11 +31,6 @@ use crate::num::floor_i64;
 /// that far out before this stage runs).
 pub fn specks(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> Vec<bool> {
     in_cubes(points, cell, &speck_cubes(points, cell, max_cubes))
-}
-
-/// The cube of edge `cell` metres holding `p`, as cube indices along x, y and z.
-fn cube_of(p: &Point3<f64>, cell: f64) -> [i64; 3] {
-    [p.x, p.y, p.z].map(|c| floor_i64(c / cell))
 }
 
 /// The occupied cubes of edge `cell` metres of `points` that lie in components of at most
@@ -62,38 +56,17 @@ fn speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[
     if jumps.saturating_mul(2) < pairs {
         return hashed_speck_cubes(points, cell, max_cubes);
     }
-    // The box of the cubes from the points' least and greatest coordinates: a cube index
-    // is monotone in its coordinate (a division by a positive `cell`, then a floor).
-    let bounds = points
-        .par_iter()
-        .with_min_len(PIECE)
-        .map(|p| (p.coords, p.coords))
-        .reduce_with(|(lo, hi), (l, h)| (lo.inf(&l), hi.sup(&h)));
-    let Some((lo, hi)) = bounds else {
-        return CellSet::default();
+    let small_box = |b: &CubeBox| {
+        b.len().is_some_and(|n| {
+            n <= points.len().saturating_mul(DENSE_CUBES_PER_POINT)
+                && u32::try_from(n).is_ok_and(|n| n < u32::MAX)
+        })
     };
-    let (lo, hi) = (cube_of(&lo.into(), cell), cube_of(&hi.into(), cell));
-    let dims = [0, 1, 2].map(|a| {
-        hi[a]
-            .checked_sub(lo[a])
-            .and_then(|d| usize::try_from(d).ok())
-            .and_then(|d| d.checked_add(1))
-    });
-    let cells = dims
-        .iter()
-        .try_fold(1usize, |n, d| d.and_then(|d| n.checked_mul(d)));
-    let dense = match cells {
-        Some(n)
-            if cell > 0.0
-                && n <= points.len().saturating_mul(DENSE_CUBES_PER_POINT)
-                && u32::try_from(n).is_ok_and(|n| n < u32::MAX) =>
-        {
-            dense_speck_cubes(points, cell, max_cubes, lo, dims.map(|d| d.unwrap_or(1)))
-        }
-        _ => None,
-    };
-    // Without a box that holds every cube (non-finite coordinates), hashed.
-    dense.unwrap_or_else(|| hashed_speck_cubes(points, cell, max_cubes))
+    // Without a box that holds every cube (no points, non-finite coordinates), hashed.
+    CubeBox::of(points, cell, PIECE)
+        .filter(small_box)
+        .and_then(|b| dense_speck_cubes(points, cell, max_cubes, b))
+        .unwrap_or_else(|| hashed_speck_cubes(points, cell, max_cubes))
 }
 
 /// Every how many points [`speck_cubes`] looks at a pair of consecutive points to tell a
@@ -105,44 +78,27 @@ const RUN_SAMPLE: usize = 64;
 /// box at 4 cm has 0.3-3.5 cubes a point; a few far strays spread it past this.
 const DENSE_CUBES_PER_POINT: usize = 4;
 
-/// [`speck_cubes`] over a dense grid of the `dims` cubes from cube `lo` on (x-major: the
-/// cube `lo + (x, y, z)` at `(x * dims[1] + y) * dims[2] + z`, fewer than `u32::MAX`
-/// cubes); `None` if some point's cube is outside it. The points mark their cubes in
-/// parallel pieces (marking twice is marking once), and the occupied cubes are numbered
-/// in grid order.
+/// [`speck_cubes`] over a dense grid of the cubes of `boxed` (fewer than `u32::MAX`);
+/// `None` if some point's cube is outside it. The points mark their cubes in parallel
+/// pieces (marking twice is marking once), and the occupied cubes are numbered in grid
+/// order.
 fn dense_speck_cubes(
     points: &[Point3<f64>],
     cell: f64,
     max_cubes: usize,
-    lo: [i64; 3],
-    dims: [usize; 3],
+    boxed: CubeBox,
 ) -> Option<CellSet<[i64; 3]>> {
-    let [_, ny, nz] = dims;
-    // The offset of cube `k` inside the box along each axis, if inside.
-    let at = |k: [i64; 3]| -> Option<[usize; 3]> {
-        let mut o = [0usize; 3];
-        for a in 0..3 {
-            o[a] = usize::try_from(k[a].checked_sub(lo[a])?).ok()?;
-            if o[a] >= dims[a] {
-                return None;
-            }
-        }
-        Some(o)
-    };
-    let index = |[x, y, z]: [usize; 3]| (x * ny + y) * nz + z;
     // 0: empty; else the cube's number plus one once numbered (1 while only marked).
-    let mut grid: Vec<AtomicU32> = (0..dims.iter().product())
-        .map(|_| AtomicU32::new(0))
-        .collect();
+    let mut grid: Vec<AtomicU32> = (0..boxed.len()?).map(|_| AtomicU32::new(0)).collect();
     let inside = points.par_chunks(PIECE).all(|piece| {
         let mut last = None;
         for p in piece {
-            let k = cube_of(p, cell);
+            let k = CubeBox::cube_of(p, cell);
             if last != Some(k) {
-                let Some(o) = at(k) else {
+                let Some(o) = boxed.offset(k) else {
                     return false;
                 };
-                grid[index(o)].store(1, Ordering::Relaxed);
+                grid[boxed.index(o)].store(1, Ordering::Relaxed);
                 last = Some(k);
             }
         }
@@ -153,29 +109,15 @@ fn dense_speck_cubes(
     }
     // The occupied cubes' offsets in the box, in grid order.
     let mut cubes: Vec<[usize; 3]> = Vec::new();
-    let mut cells = grid.iter_mut();
-    for x in 0..dims[0] {
-        for y in 0..ny {
-            for (z, g) in (0..nz).zip(cells.by_ref()) {
-                let g = g.get_mut();
-                if *g != 0 {
-                    cubes.push([x, y, z]);
-                    *g = u32::try_from(cubes.len()).unwrap_or(u32::MAX);
-                }
-            }
+    for (i, g) in grid.iter_mut().enumerate() {
+        let g = g.get_mut();
+        if *g != 0 {
+            cubes.push(boxed.offset_of_index(i));
+            *g = u32::try_from(cubes.len()).unwrap_or(u32::MAX);
         }
     }
-    let small = small_components(cubes.len(), max_cubes, |i, (dx, dy, dz)| {
-        let [x, y, z] = cubes[i];
-        let n = [
-            x.checked_add_signed(isize::try_from(dx).ok()?)?,
-            y.checked_add_signed(isize::try_from(dy).ok()?)?,
-            z.checked_add_signed(isize::try_from(dz).ok()?)?,
-        ];
-        if n.iter().zip(&dims).any(|(v, d)| v >= d) {
-            return None;
-        }
-        match grid[index(n)].load(Ordering::Relaxed) {
+    let small = small_components(cubes.len(), max_cubes, |i, d| {
+        match grid[boxed.index(boxed.step(cubes[i], d)?)].load(Ordering::Relaxed) {
             0 => None,
             id => Some(id as usize - 1),
         }
@@ -184,8 +126,7 @@ fn dense_speck_cubes(
         .iter()
         .zip(small)
         .filter(|(_, s)| *s)
-        // Inside the box: the offsets fit `i64` (the box's span did).
-        .map(|(p, _)| [0, 1, 2].map(|a| lo[a] + i64::try_from(p[a]).unwrap_or(0)))
+        .map(|(&o, _)| boxed.cube(o))
         .collect();
     Some(set)
 }
@@ -198,7 +139,7 @@ fn hashed_speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> Ce
     let mut cubes: Vec<[i64; 3]> = Vec::new();
     let mut last: Option<[i64; 3]> = None;
     for p in points {
-        let k = cube_of(p, cell);
+        let k = CubeBox::cube_of(p, cell);
         if last != Some(k) {
             ids.entry(k).or_insert_with(|| {
                 cubes.push(k);
@@ -242,7 +183,7 @@ fn in_cubes(points: &[Point3<f64>], cell: f64, cubes: &CellSet<[i64; 3]>) -> Vec
     points
         .par_iter()
         .with_min_len(PIECE)
-        .map(|p| cubes.contains(&cube_of(p, cell)))
+        .map(|p| cubes.contains(&CubeBox::cube_of(p, cell)))
         .collect()
 }
 
@@ -370,12 +311,14 @@ mod tests {
             }
             let cell = [0.04, 0.05, 0.1][round % 3];
             let max_cubes = [1, 2, 8][round % 3];
-            let keys: Vec<[i64; 3]> = pts.iter().map(|p| cube_of(p, cell)).collect();
+            let keys: Vec<[i64; 3]> = pts.iter().map(|p| CubeBox::cube_of(p, cell)).collect();
             let lo = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).min().unwrap());
             let hi = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).max().unwrap());
             let dims = [0, 1, 2].map(|a| usize::try_from(hi[a] - lo[a] + 1).unwrap());
+            assert_eq!(CubeBox::of(&pts, cell, PIECE), Some(CubeBox { lo, dims }));
             let hashed = sorted(hashed_speck_cubes(&pts, cell, max_cubes));
-            let dense = sorted(dense_speck_cubes(&pts, cell, max_cubes, lo, dims).unwrap());
+            let boxed = CubeBox { lo, dims };
+            let dense = sorted(dense_speck_cubes(&pts, cell, max_cubes, boxed).unwrap());
             assert_eq!(dense, hashed, "round {round}");
             assert_eq!(sorted(speck_cubes(&pts, cell, max_cubes)), hashed);
             found += hashed.len();
