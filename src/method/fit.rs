@@ -70,7 +70,10 @@ fn all_round(from: f64, step: f64) -> Vec<f64> {
 /// (a gradient off by 90 degrees must not lose the place). When still nothing fits, the
 /// hierarchy's `deferred_links` (limbs a node unfolds later, such as arms raised for an
 /// armrest) are left out of the collision tests and every heading is tried again: a limb
-/// that will move must not lose the seat.
+/// that will move must not lose the seat. When even then nothing fits, the
+/// `overhang_links` are tested by their lower half only ([`lower_half`]) and every heading
+/// is tried once more: a desk over the thighs of a chair pushed in under it must not lose
+/// the seat either (the chair is pulled out to sit).
 pub fn fit(
     agent: &Agent,
     h: &Hierarchy,
@@ -78,18 +81,51 @@ pub fn fit(
     hyp: &Hypothesis,
     contact: &ContactConfig,
 ) -> Vec<Fit> {
-    let fits = fit_checking(agent, h, scene, hyp, contact, &h.fit.unchecked_links);
-    if !fits.is_empty() || h.fit.deferred_links.is_empty() {
+    let mut unchecked = h.fit.unchecked_links.clone();
+    let fits = fit_checking(agent, h, scene, hyp, contact, &unchecked, &[]);
+    if !fits.is_empty() {
         return fits;
     }
-    let mut unchecked = h.fit.unchecked_links.clone();
     unchecked.extend(&h.fit.deferred_links);
-    fit_checking(agent, h, scene, hyp, contact, &unchecked)
+    let fits = if h.fit.deferred_links.is_empty() {
+        fits
+    } else {
+        fit_checking(agent, h, scene, hyp, contact, &unchecked, &[])
+    };
+    if !fits.is_empty() || h.fit.overhang_links.is_empty() {
+        return fits;
+    }
+    fit_checking(
+        agent,
+        h,
+        scene,
+        hyp,
+        contact,
+        &unchecked,
+        &h.fit.overhang_links,
+    )
 }
 
-/// [`fit`] with the links `unchecked` left out of the collision tests: the headings of
-/// [`headings`], then, if none of them was free, all round from [`Hypothesis::facing`]
-/// (else the place's own heading), those fits marked [`Fit::turned`].
+/// The lower half of body part `c` in a pose whose axis is level (the thighs of the
+/// initial sitting pose): a cylinder of half the radius along its underside, lowered by
+/// that much, so that its bottom is the part's and its top the part's axis. It touches
+/// what lies below the axis (a mattress round a pelvis sunk into it), not what lies over
+/// the part (a desk's underside or drawer over the thighs).
+pub fn lower_half(c: &Cylinder) -> Cylinder {
+    let half = c.radius / 2.0;
+    let down = nalgebra::Vector3::new(0.0, 0.0, half);
+    Cylinder {
+        joint: c.joint,
+        a: c.a - down,
+        b: c.b - down,
+        radius: half,
+    }
+}
+
+/// [`fit`] with the links `unchecked` left out of the collision tests and the links
+/// `halved` tested by their [`lower_half`]: the headings of [`headings`], then, if none
+/// of them was free, all round from [`Hypothesis::facing`] (else the place's own
+/// heading), those fits marked [`Fit::turned`].
 fn fit_checking(
     agent: &Agent,
     h: &Hierarchy,
@@ -97,9 +133,11 @@ fn fit_checking(
     hyp: &Hypothesis,
     contact: &ContactConfig,
     unchecked: &[usize],
+    halved: &[usize],
 ) -> Vec<Fit> {
+    let links = Links { unchecked, halved };
     let first = headings(h, hyp);
-    let (fits, any_free) = fit_headings(agent, h, scene, hyp, &first, contact, unchecked);
+    let (fits, any_free) = fit_headings(agent, h, scene, hyp, &first, contact, &links);
     let Some(own) = own_heading(hyp).filter(|_| !any_free) else {
         return fits;
     };
@@ -108,11 +146,33 @@ fn fit_checking(
         .into_iter()
         .filter(|y| tried.iter().all(|t| angle_between(*t, *y) > 1e-6))
         .collect();
-    let mut turned = fit_headings(agent, h, scene, hyp, &rest, contact, unchecked).0;
+    let mut turned = fit_headings(agent, h, scene, hyp, &rest, contact, &links).0;
     for f in &mut turned {
         f.turned = true;
     }
     turned
+}
+
+/// Which links a fit leaves out of its collision tests, and which it tests by their
+/// [`lower_half`] (joint indices).
+struct Links<'a> {
+    unchecked: &'a [usize],
+    halved: &'a [usize],
+}
+
+impl Links<'_> {
+    /// The body parts of `frames` the fit tests, into `out`.
+    fn parts(&self, agent: &Agent, frames: &[nalgebra::Isometry3<f64>], out: &mut Vec<Cylinder>) {
+        agent.cylinders_into(frames, |j| !self.unchecked.contains(&j), out);
+        if self.halved.is_empty() {
+            return;
+        }
+        for c in out.iter_mut() {
+            if self.halved.contains(&c.joint) {
+                *c = lower_half(c);
+            }
+        }
+    }
 }
 
 fn angle_between(a: f64, b: f64) -> f64 {
@@ -129,7 +189,7 @@ fn fit_headings(
     hyp: &Hypothesis,
     yaws: &[f64],
     contact: &ContactConfig,
-    unchecked: &[usize],
+    links: &Links,
 ) -> (Vec<Fit>, bool) {
     let posture = &h.initial;
     let mut frames = Vec::new();
@@ -163,7 +223,7 @@ fn fit_headings(
         let free_at = |z: f64, parts: &mut Vec<Cylinder>, f: &mut Vec<_>| {
             parts.clear();
             agent.forward_kinematics(&at(z), posture, f);
-            agent.cylinders_into(f, |j| !unchecked.contains(&j), parts);
+            links.parts(agent, f, parts);
             !parts.iter().any(|c| scene.touches(c))
         };
         let (start_z, drop) = if free_at(start_z, &mut parts, &mut f) {
@@ -175,7 +235,7 @@ fn fit_headings(
         };
         let mut pose = |t: f64, out: &mut Vec<Cylinder>| {
             agent.forward_kinematics_cached(&at(start_z - t * drop), posture, &mut cache, &mut f);
-            agent.cylinders_into(&f, |j| !unchecked.contains(&j), out);
+            links.parts(agent, &f, out);
         };
         any_free = true;
         let Some(t) = scene.first_contact(&mut pose, drop, contact.resolution) else {
@@ -362,6 +422,83 @@ mod tests {
             (0.455..=0.47).contains(&bottom),
             "pelvis bottom at {bottom}"
         );
+    }
+
+    #[test]
+    fn the_lower_half_of_a_level_part_spans_its_bottom_to_its_axis() {
+        let c = Cylinder {
+            joint: 3,
+            a: Point3::new(0.0, 0.0, 0.52),
+            b: Point3::new(0.4, 0.1, 0.52),
+            radius: 0.07,
+        };
+        let h = lower_half(&c);
+        assert_eq!(h.joint, 3);
+        assert!((h.radius - 0.035).abs() < 1e-12);
+        assert!(
+            (h.a.z - h.radius - (c.a.z - c.radius)).abs() < 1e-12,
+            "same bottom"
+        );
+        assert!((h.b.z + h.radius - c.b.z).abs() < 1e-12, "top at the axis");
+        assert_eq!((h.a.x, h.a.y, h.b.x, h.b.y), (0.0, 0.0, 0.4, 0.1));
+    }
+
+    /// An armchair pushed in under a desk: the seat of `seat()` inside a back (x = -0.25)
+    /// and two arms (y = +-0.28), and over its front (x 0.1 to 0.5) the underside of a
+    /// drawer `above` metres over the seat, or a block `above` metres high standing on it.
+    /// Turned away from the desk the thighs meet the back or an arm.
+    fn armchair_under(above: f64, block: bool) -> Scene {
+        let mut pts = Vec::new();
+        let steps = |from: f64, to: f64| {
+            let n = to_usize(((to - from) / 0.01).round());
+            (0..=n).map(move |i| from + i as f64 * 0.01)
+        };
+        for x in steps(-0.5, 0.5) {
+            for y in steps(-0.5, 0.5) {
+                pts.push(Point3::new(x, y, 0.45));
+                if x >= 0.1 && y.abs() <= 0.3 {
+                    pts.push(Point3::new(x, y, 0.45 + above));
+                    if block {
+                        pts.extend(steps(0.45, 0.45 + above).map(|z| Point3::new(x, y, z)));
+                    }
+                }
+            }
+        }
+        for z in steps(0.45, 1.2) {
+            for y in steps(-0.3, 0.3) {
+                pts.push(Point3::new(-0.25, y, z));
+            }
+            for x in steps(-0.25, 0.3).filter(|_| z <= 0.8) {
+                pts.push(Point3::new(x, -0.28, z));
+                pts.push(Point3::new(x, 0.28, z));
+            }
+        }
+        scene_of(pts)
+    }
+
+    #[test]
+    fn a_drawer_over_the_thighs_does_not_lose_the_seat_what_stands_under_them_does() {
+        let (a, h) = models();
+        assert!(!h.fit.overhang_links.is_empty());
+        // Seated, the thighs reach 0.14 m above the seat; started 2-4 cm higher, 0.16-0.18.
+        let fits = fit_over_the_seat(&a, &h, &armchair_under(0.13, false));
+        assert!(!fits.is_empty(), "the drawer lost the seat");
+        for f in &fits {
+            let yaw = f.placement.yaw.to_degrees();
+            assert!(yaw.abs() <= 20.0 + 1e-9, "facing the desk: {yaw}");
+            let bottom = pelvis_bottom(&a, f);
+            assert!(
+                (0.455..=0.47).contains(&bottom),
+                "pelvis bottom at {bottom}"
+            );
+        }
+        // Without the last try (no overhang links) nothing fits at any heading.
+        let mut strict = h.clone();
+        strict.fit.overhang_links.clear();
+        assert!(fit_over_the_seat(&a, &strict, &armchair_under(0.13, false)).is_empty());
+        // A block 5 cm high on the seat's front fills the space below the thighs' axis:
+        // the lowered body rests on it, not on the seat, and is not stable.
+        assert!(fit_over_the_seat(&a, &h, &armchair_under(0.05, true)).is_empty());
     }
 
     #[test]

@@ -125,6 +125,12 @@ pub struct FitRule {
     /// heading fits with them: then the fit is tried again without them, so that arms
     /// raised for an armrest do not lose a seat whose arm rails they meet (joint indices).
     pub deferred_links: Vec<usize>,
+    /// Links tested by their lower half only (a cylinder of half the radius along their
+    /// underside) in a last try, when no heading fits even without `deferred_links`: a
+    /// desk's underside or drawer over the thighs of a chair pushed in under it does not
+    /// lose the seat (the chair is pulled out to sit), while what fills the space below
+    /// their axis still stops them (joint indices; an extension of section 4.2).
+    pub overhang_links: Vec<usize>,
 }
 
 /// How the best pose of a hypothesis, and the strongest of neighbouring detections, are chosen.
@@ -393,6 +399,8 @@ struct FitFile {
     unchecked_links: Vec<String>,
     #[serde(default)]
     deferred_links: Vec<String>,
+    #[serde(default)]
+    overhang_links: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -554,6 +562,7 @@ impl Hierarchy {
         let unchecked_links =
             names.links(&fit.key("unchecked_links"), &file.fit.unchecked_links)?;
         let deferred_links = names.links(&fit.key("deferred_links"), &file.fit.deferred_links)?;
+        let overhang_links = names.links(&fit.key("overhang_links"), &file.fit.overhang_links)?;
         let key = |i: usize| Key::top("node").item(i, &file.node[i].id);
         let order = tree_order(
             src,
@@ -589,6 +598,7 @@ impl Hierarchy {
                 stability_links,
                 unchecked_links,
                 deferred_links,
+                overhang_links,
             },
             score: ScoreRule {
                 sigma_theta: file.score.sigma_theta.to_radians(),
