@@ -86,24 +86,18 @@ pub fn fit(
     if !fits.is_empty() {
         return fits;
     }
-    unchecked.extend(&h.fit.deferred_links);
-    let fits = if h.fit.deferred_links.is_empty() {
-        fits
-    } else {
-        fit_checking(agent, h, scene, hyp, contact, &unchecked, &[])
-    };
-    if !fits.is_empty() || h.fit.overhang_links.is_empty() {
-        return fits;
+    if !h.fit.deferred_links.is_empty() {
+        unchecked.extend(&h.fit.deferred_links);
+        let fits = fit_checking(agent, h, scene, hyp, contact, &unchecked, &[]);
+        if !fits.is_empty() {
+            return fits;
+        }
     }
-    fit_checking(
-        agent,
-        h,
-        scene,
-        hyp,
-        contact,
-        &unchecked,
-        &h.fit.overhang_links,
-    )
+    if h.fit.overhang_links.is_empty() {
+        return Vec::new();
+    }
+    let halved = &h.fit.overhang_links;
+    fit_checking(agent, h, scene, hyp, contact, &unchecked, halved)
 }
 
 /// The lower half of body part `c` in a pose whose axis is level (the thighs of the
@@ -180,7 +174,7 @@ fn angle_between(a: f64, b: f64) -> f64 {
     d.min(std::f64::consts::TAU - d)
 }
 
-/// Fits at each heading, collision-testing every link but `unchecked`; also says whether
+/// Fits at each heading, collision-testing the body parts of `links`; also says whether
 /// any heading was free at the start.
 fn fit_headings(
     agent: &Agent,
