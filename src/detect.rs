@@ -18,7 +18,7 @@ use crate::method::select::{segment_in, suppress, SegmentConfig, SegmentGrid};
 use crate::method::specks::without_specks;
 use crate::method::unfold::{unfold, Unfolded};
 use crate::model::agent::{Agent, Cylinder};
-use crate::model::hierarchy::Hierarchy;
+use crate::model::hierarchy::{Hierarchy, Selection};
 use crate::model::set::Model;
 
 /// The scene-level numbers of a run (not per hierarchy). Defaults carry their reasons.
@@ -374,41 +374,73 @@ fn find(
     grid: &OnceLock<SegmentGrid>,
 ) -> Found {
     let hyps = hypotheses(&prepared.map, &h.hypothesis, h.orientation, agent.height);
-    let search = || -> Vec<(Option<Unfolded>, usize)> {
-        hyps.par_iter()
-            .map(|hyp| best_at(agent, h, &prepared.scene, hyp, cfg))
-            .collect()
+    let radius = h.suppression_radius * agent.height;
+    // The best pose at each hypothesis of `at` (indices into `hyps`), as candidates
+    // (hypothesis, pose), with the number of fits tried.
+    let search = |at: &[usize]| -> (Vec<(usize, Unfolded)>, usize) {
+        let results: Vec<(Option<Unfolded>, usize)> = at
+            .par_iter()
+            .map(|&i| best_at(agent, h, &prepared.scene, &hyps[i], cfg))
+            .collect();
+        let fits = results.iter().map(|r| r.1).sum();
+        let found = at
+            .iter()
+            .zip(results)
+            .filter_map(|(&i, (u, _))| u.map(|u| (i, u)))
+            .collect();
+        (found, fits)
     };
+    let (plain, risen): (Vec<usize>, Vec<usize>) = (0..hyps.len()).partition(|&i| !hyps[i].risen);
     // With hypotheses to try, a detection (and so the segmentation's cells) is likely:
     // the cells are built beside the search rather than after it. They depend on `cloud`
     // and `cfg.segment` only, so they are the same whenever they are built.
-    let results = if hyps.is_empty() {
-        Vec::new()
+    let (mut candidates, mut fits) = if hyps.is_empty() {
+        (Vec::new(), 0)
     } else {
-        rayon::join(search, || {
-            grid.get_or_init(|| SegmentGrid::new(cloud, &cfg.segment));
-        })
+        rayon::join(
+            || search(&plain),
+            || {
+                grid.get_or_init(|| SegmentGrid::new(cloud, &cfg.segment));
+            },
+        )
         .0
     };
-    let fits = results.iter().map(|r| r.1).sum();
-    let candidates: Vec<(usize, Unfolded)> = results
+    // Places found only with a rise set aside rank after every plain one
+    // ([`strongest_first`]), so the plain places kept are those kept among the plain
+    // candidates alone, and a risen place within the radius of one of them would be
+    // suppressed: only the others are tried (the same detections as trying all).
+    let kept_plain = {
+        let ranked: Vec<(bool, &Unfolded)> = candidates.iter().map(|(_, u)| (false, u)).collect();
+        let centres: Vec<Point3<f64>> = candidates
+            .iter()
+            .map(|(_, u)| u.placement.position)
+            .collect();
+        let kept = suppress(&centres, &strongest_first(&ranked, h.score.select), radius);
+        kept.into_iter().map(|k| centres[k]).collect::<Vec<_>>()
+    };
+    let apart: Vec<usize> = risen
         .into_iter()
-        .enumerate()
-        .filter_map(|(i, (u, _))| u.map(|u| (i, u)))
+        .filter(|&i| {
+            let p = hyps[i].position;
+            kept_plain.iter().all(|c| (c.xy() - p.xy()).norm() > radius)
+        })
         .collect();
-    let mut order: Vec<usize> = (0..candidates.len()).collect();
-    // Strongest first; ties by hypothesis order, so the result is independent of threads.
-    order.sort_by(|&a, &b| {
-        candidates[b]
-            .1
-            .rank(&candidates[a].1, h.score.select)
-            .then(a.cmp(&b))
-    });
+    if !apart.is_empty() {
+        let (more, more_fits) = search(&apart);
+        candidates.extend(more);
+        candidates.sort_by_key(|(i, _)| *i);
+        fits += more_fits;
+    }
+    let ranked: Vec<(bool, &Unfolded)> = candidates
+        .iter()
+        .map(|(i, u)| (hyps[*i].risen, u))
+        .collect();
+    let order = strongest_first(&ranked, h.score.select);
     let centres: Vec<Point3<f64>> = candidates
         .iter()
         .map(|(_, u)| u.placement.position)
         .collect();
-    let kept = suppress(&centres, &order, h.suppression_radius * agent.height);
+    let kept = suppress(&centres, &order, radius);
     let detections: Vec<Detection> = kept
         .iter()
         .map(|&k| {
@@ -426,6 +458,21 @@ fn find(
             candidates: candidates.len(),
         },
     }
+}
+
+/// The order in which candidates are kept by suppression: indices into `candidates`
+/// (each with whether its place was found only by setting aside what stands over a seat's
+/// edge, [`Hypothesis::risen`]), plain places before such ones, each strongest first under
+/// `select`, ties by index (hypothesis order), so the result is independent of threads.
+/// A place found only with the rise set aside is thus kept only where no plain place is
+/// near: it adds seats, it does not move them.
+fn strongest_first(candidates: &[(bool, &Unfolded)], select: Selection) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..candidates.len()).collect();
+    order.sort_by(|&a, &b| {
+        let ((ra, ua), (rb, ub)) = (candidates[a], candidates[b]);
+        ra.cmp(&rb).then(ub.rank(ua, select)).then(a.cmp(&b))
+    });
+    order
 }
 
 /// The segmentation of [`detect_prepared`]: the points of `cloud` grown from each
@@ -526,6 +573,25 @@ mod tests {
                 ));
             }
         }
+    }
+
+    #[test]
+    fn a_place_found_by_setting_a_rise_aside_never_suppresses_a_plain_one() {
+        let pose = |x: f64, found: usize| {
+            crate::method::unfold::pose_at(Point3::new(x, 0.0, 0.5), false, found, 0.9)
+        };
+        // A plain seat, a place 0.2 m from it found only with its arm set aside (it finds
+        // the arm: more affordances), and such a place alone 2 m away.
+        let (plain, beside, alone) = (pose(0.0, 2), pose(0.2, 3), pose(2.0, 3));
+        let risen_too = [(false, &plain), (true, &beside), (true, &alone)];
+        let order = strongest_first(&risen_too, Selection::MostSpecific);
+        assert_eq!(order, [0, 1, 2]);
+        let centres = [0.0, 0.2, 2.0].map(|x| Point3::new(x, 0.0, 0.5));
+        assert_eq!(suppress(&centres, &order, 0.5), [0, 2]);
+        // Were the places all plain, the one beside would win the seat.
+        let all_plain = [(false, &plain), (false, &beside), (false, &alone)];
+        let order = strongest_first(&all_plain, Selection::MostSpecific);
+        assert_eq!(suppress(&centres, &order, 0.5), [1, 2]);
     }
 
     /// The height map's cell at world `(x, y)`.

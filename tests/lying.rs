@@ -121,6 +121,7 @@ fn unfolded_in(c: &PointCloud, height: f64, x: f64) -> Vec<String> {
         heading: Some(0.0),
         facing: None,
         memberships: [1.0; 3],
+        risen: false,
     };
     let fits = fit(&agent, &h, &prepared.scene, &hyp, &cfg.contact);
     let f = fits

@@ -330,6 +330,7 @@ mod tests {
             heading: Some(0.0),
             facing: None,
             memberships: [1.0; 3],
+            risen: false,
         }
     }
 

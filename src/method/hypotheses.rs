@@ -32,6 +32,10 @@ pub struct Hypothesis {
     pub facing: Option<f64>,
     /// The three memberships: discontinuity low, roughness low, height comfortable.
     pub memberships: [f64; 3],
+    /// Whether the rating set aside cells standing over the seat's edge (the rule's
+    /// `rise_height`): such a place is a seat only where no plain one is near, and its
+    /// detections rank after those of plain places.
+    pub risen: bool,
 }
 
 /// Rates every valid cell of `map` with the rule of section 4.1 for an agent of body
@@ -90,6 +94,7 @@ fn hypotheses_in_pieces(
                 mean,
                 top,
                 memberships,
+                risen,
             }) = rate(&*band, ix, iy, &template, height.as_ref(), rule_)
             else {
                 continue;
@@ -135,6 +140,7 @@ fn hypotheses_in_pieces(
                 heading,
                 facing,
                 memberships,
+                risen,
             });
         }
     };
@@ -226,6 +232,8 @@ pub struct Rating {
     pub top: f64,
     /// Discontinuity low, roughness low, height comfortable.
     pub memberships: [f64; 3],
+    /// Whether cells above the rule's `rise_height` were set aside.
+    pub risen: bool,
 }
 
 /// Count, sum, sum of squares and highest of a set of heights, metres: their mean and
@@ -284,7 +292,7 @@ pub fn rate(
     rule_: &HypothesisRule,
 ) -> Option<Rating> {
     let at = |dx: isize, dy: isize| map.height(ix as isize + dx, iy as isize + dy);
-    at(0, 0)?;
+    let centre = at(0, 0)?;
     let mut all = Moments::default();
     for &(dx, dy) in template {
         if let Some(h) = at(dx, dy) {
@@ -292,14 +300,23 @@ pub fn rate(
         }
     }
     let mut kept = all;
-    if let Some(depth) = rule_
-        .hole_depth
-        .filter(|_| all.spread() > rule_.roughness.full)
+    let mut risen = false;
+    if all.spread() > rule_.roughness.full
+        && (rule_.hole_depth.is_some() || rule_.rise_height.is_some())
     {
         let mut hs: Vec<f64> = template.iter().filter_map(|&(dx, dy)| at(dx, dy)).collect();
         let mid = hs.len() / 2;
         let (_, median, _) = hs.select_nth_unstable_by(mid, f64::total_cmp);
-        let (median, floor) = (*median, *median - depth);
+        let median = *median;
+        let depth = rule_.hole_depth.unwrap_or(f64::INFINITY);
+        // A place on the rise itself (the top of an arm or a back) keeps its cells as
+        // roughness.
+        let ceiling = rule_
+            .rise_height
+            .map(|r| median + r)
+            .filter(|&c| centre <= c)
+            .unwrap_or(f64::INFINITY);
+        let floor = median - depth;
         // One cell past the template's farthest offset.
         let reach = template
             .iter()
@@ -322,6 +339,7 @@ pub fn rate(
         kept = Moments::default();
         for &(dx, dy) in template {
             match at(dx, dy) {
+                Some(h) if h > ceiling => risen = true,
                 Some(h) if h >= floor || !enclosed(dx, dy) => kept.add(h),
                 _ => {}
             }
@@ -331,6 +349,7 @@ pub fn rate(
     let (mean, roughness) = (kept.mean(), kept.spread());
     let discontinuity = 1.0 - n as f64 / template.len() as f64;
     Some(Rating {
+        risen,
         mean,
         top,
         memberships: [
@@ -515,6 +534,7 @@ mod tests {
             facing_tolerance: None,
             facing_overrules: false,
             hole_depth: None,
+            rise_height: None,
             discontinuity: Low {
                 full: 0.1,
                 zero: 0.4,
@@ -601,6 +621,47 @@ mod tests {
         assert_eq!(rated(&gaps, 5, 10).memberships[1], 0.0);
         // A smooth place is rated the same by both.
         assert_eq!(rated(&paper, 7, 6), rated(&gaps, 7, 6));
+    }
+
+    #[test]
+    fn what_stands_over_a_seats_edge_is_set_aside_and_marked() {
+        // A 12 x 12 cell seat at 0.45 m whose front rows (y >= 13) lie under a desk top
+        // at 0.72 m (the seat under it hidden), on the floor; a template of radius 3 cells.
+        let m = map(|x, y| {
+            Some(match ((4..16).contains(&x), y) {
+                (true, 13..=15) => 0.72,
+                (true, 4..=12) => 0.45,
+                _ => 0.0,
+            })
+        });
+        let paper = HypothesisRule {
+            template_diameter: 0.3,
+            hole_depth: Some(0.25),
+            ..rule_()
+        };
+        let risen = HypothesisRule {
+            rise_height: Some(0.10),
+            ..paper.clone()
+        };
+        let template = m.disc(0.15);
+        let rated = |rule: &HypothesisRule, x: usize, y: usize| {
+            rate(&m, x, y, &template, None, rule).unwrap()
+        };
+        // Two rows from the desk: rough in the paper's rule; with the rise set aside, a
+        // smooth seat with the desk's cells missing, at the seat's height, marked.
+        let p = rated(&paper, 10, 11);
+        assert_eq!(p.memberships[1], 0.0);
+        assert!(!p.risen);
+        let r = rated(&risen, 10, 11);
+        assert_eq!(r.memberships[1], 1.0);
+        assert!(r.memberships[0] > 0.0 && r.memberships[0] < 1.0, "{r:?}");
+        assert!((r.mean - 0.45).abs() < 1e-12 && r.top == 0.45 && r.risen);
+        // On the desk itself the rating stays rough.
+        let d = rated(&risen, 10, 13);
+        assert_eq!(d.memberships[1], 0.0);
+        assert!(!d.risen);
+        // Away from the desk both rules agree and nothing is marked.
+        assert_eq!(rated(&paper, 8, 6), rated(&risen, 8, 6));
     }
 
     #[test]

@@ -49,6 +49,34 @@ pub struct Unfolded {
     pub turned: bool,
 }
 
+/// A pose of four nodes at `position` (no joints), the first `found` of them found, for
+/// tests of the ranking and the selection.
+#[cfg(test)]
+pub(crate) fn pose_at(
+    position: nalgebra::Point3<f64>,
+    turned: bool,
+    found: usize,
+    score: f64,
+) -> Unfolded {
+    Unfolded {
+        placement: Placement { position, yaw: 0.0 },
+        posture: Posture {
+            angles: Vec::new(),
+            axes: Vec::new(),
+        },
+        nodes: (0..4)
+            .map(|i| NodeOutcome {
+                visited: true,
+                found: i < found,
+                local: 1.0,
+            })
+            .collect(),
+        score,
+        stability: 1.0,
+        turned,
+    }
+}
+
 impl Unfolded {
     /// Number of fine-grained affordances found.
     pub fn found(&self) -> usize {
@@ -808,25 +836,8 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
     #[test]
     fn a_turned_pose_ranks_below_one_at_the_places_heading() {
         use crate::model::hierarchy::Selection;
-        let pose = |turned: bool, found: usize, score: f64| Unfolded {
-            placement: Placement {
-                position: Point3::origin(),
-                yaw: 0.0,
-            },
-            posture: Posture {
-                angles: Vec::new(),
-                axes: Vec::new(),
-            },
-            nodes: (0..4)
-                .map(|i| NodeOutcome {
-                    visited: true,
-                    found: i < found,
-                    local: 1.0,
-                })
-                .collect(),
-            score,
-            stability: 1.0,
-            turned,
+        let pose = |turned: bool, found: usize, score: f64| {
+            pose_at(Point3::origin(), turned, found, score)
         };
         let (natural, turned) = (pose(false, 2, 0.9), pose(true, 3, 0.99));
         assert!(natural.stronger_than(&turned, Selection::MostSpecific));

@@ -57,6 +57,12 @@ pub struct HypothesisRule {
     /// valid cell counts towards the roughness, as in the paper.
     #[serde(default)]
     pub hole_depth: Option<f64>,
+    /// Cells this far (metres) above the template's median height are something standing
+    /// over the seat's edge (a back, an arm, a desk top over its front), counted as
+    /// missing rather than as roughness, where the template is rougher than `roughness`
+    /// fully allows (an extension); absent: they count towards the roughness.
+    #[serde(default)]
+    pub rise_height: Option<f64>,
     /// "Height is comfortable": mean height under the template, fractions of H;
     /// absent to switch the height membership off.
     #[serde(default)]
@@ -854,6 +860,11 @@ fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
     if let Some(v) = h.hole_depth {
         if !Positive.holds(v) {
             return Err(src.invalid(&hyp.key("hole_depth"), Positive.what(v)));
+        }
+    }
+    if let Some(v) = h.rise_height {
+        if !Positive.holds(v) {
+            return Err(src.invalid(&hyp.key("rise_height"), Positive.what(v)));
         }
     }
     if let Some(v) = h.facing_tolerance {
@@ -1654,6 +1665,23 @@ mod tests {
         );
         let (e, line) = edited("hole_depth = 0.25", "hole_depth = 0.0");
         names(&e, line, "hypothesis.hole_depth", "positive");
+    }
+
+    #[test]
+    fn a_bad_rise_height_is_named() {
+        assert_eq!(
+            load(BUILTIN_SITTING).unwrap().hypothesis.rise_height,
+            Some(0.10)
+        );
+        assert_eq!(
+            load(crate::model::set::BUILTIN_LYING)
+                .unwrap()
+                .hypothesis
+                .rise_height,
+            None
+        );
+        let (e, line) = edited("rise_height = 0.10", "rise_height = -0.1");
+        names(&e, line, "hypothesis.rise_height", "positive");
     }
 
     #[test]

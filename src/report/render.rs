@@ -836,6 +836,7 @@ mod tests {
             heading,
             facing: None,
             memberships: [1.0; 3],
+            risen: false,
         }
     }
 
