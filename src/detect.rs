@@ -408,7 +408,8 @@ fn find(
     // Places found only with a rise set aside rank after every plain one
     // ([`strongest_first`]), so the plain places kept are those kept among the plain
     // candidates alone, and a risen place within the radius of one of them would be
-    // suppressed: only the others are tried (the same detections as trying all).
+    // suppressed: only the others are tried (the same detections as trying all, but
+    // where the fit's last resort, `shift_back`, would have moved a place out of it).
     let kept_plain = {
         let ranked: Vec<(bool, &Unfolded)> = candidates.iter().map(|(_, u)| (false, u)).collect();
         let centres: Vec<Point3<f64>> = candidates

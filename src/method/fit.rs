@@ -73,7 +73,11 @@ fn all_round(from: f64, step: f64) -> Vec<f64> {
 /// that will move must not lose the seat. When even then nothing fits, the
 /// `overhang_links` are tested by their lower half only ([`lower_half`]) and every heading
 /// is tried once more: a desk over the thighs of a chair pushed in under it must not lose
-/// the seat either (the chair is pulled out to sit).
+/// the seat either (the chair is pulled out to sit). When still nothing fits, the place is
+/// moved back along its own heading by each of `shift_back` in turn (nearest first) and
+/// tried so: where the chair is pushed in so far that the body meets the desk at the
+/// place, the seat's free rear behind it still seats it. Those fits stand where the place
+/// was moved to.
 pub fn fit(
     agent: &Agent,
     h: &Hierarchy,
@@ -97,7 +101,25 @@ pub fn fit(
         return Vec::new();
     }
     let halved = &h.fit.overhang_links;
-    fit_checking(agent, h, scene, hyp, contact, &unchecked, halved)
+    let fits = fit_checking(agent, h, scene, hyp, contact, &unchecked, halved);
+    if !fits.is_empty() {
+        return fits;
+    }
+    let Some(heading) = own_heading(hyp) else {
+        return fits;
+    };
+    let back = -nalgebra::Vector3::new(heading.cos(), heading.sin(), 0.0);
+    for &d in &h.fit.shift_back {
+        let moved = Hypothesis {
+            position: hyp.position + back * d,
+            ..hyp.clone()
+        };
+        let fits = fit_checking(agent, h, scene, &moved, contact, &unchecked, halved);
+        if !fits.is_empty() {
+            return fits;
+        }
+    }
+    Vec::new()
 }
 
 /// The lower half of body part `c` in a pose whose axis is level (the thighs of the
@@ -438,25 +460,21 @@ mod tests {
         assert_eq!((h.a.x, h.a.y, h.b.x, h.b.y), (0.0, 0.0, 0.4, 0.1));
     }
 
-    /// An armchair pushed in under a desk: the seat of `seat()` inside a back (x = -0.25)
-    /// and two arms (y = +-0.28), and over its front (x 0.1 to 0.5) the underside of a
-    /// drawer `above` metres over the seat, or a block `above` metres high standing on it.
-    /// Turned away from the desk the thighs meet the back or an arm.
-    fn armchair_under(above: f64, block: bool) -> Scene {
+    /// Heights from `from` to `to` (metres) 1 cm apart.
+    fn steps(from: f64, to: f64) -> impl Iterator<Item = f64> {
+        let n = to_usize(((to - from) / 0.01).round());
+        (0..=n).map(move |i| from + i as f64 * 0.01)
+    }
+
+    /// An armchair: the seat of `seat()` inside a back (x = -0.25) and two arms (y =
+    /// +-0.28, to x = 0.3 and z = 0.8), with points at the heights `over(x, y)` over each
+    /// point of the seat. Turned away from the front the thighs meet the back or an arm.
+    fn armchair(over: impl Fn(f64, f64) -> Vec<f64>) -> Scene {
         let mut pts = Vec::new();
-        let steps = |from: f64, to: f64| {
-            let n = to_usize(((to - from) / 0.01).round());
-            (0..=n).map(move |i| from + i as f64 * 0.01)
-        };
         for x in steps(-0.5, 0.5) {
             for y in steps(-0.5, 0.5) {
                 pts.push(Point3::new(x, y, 0.45));
-                if x >= 0.1 && y.abs() <= 0.3 {
-                    pts.push(Point3::new(x, y, 0.45 + above));
-                    if block {
-                        pts.extend(steps(0.45, 0.45 + above).map(|z| Point3::new(x, y, z)));
-                    }
-                }
+                pts.extend(over(x, y).into_iter().map(|z| Point3::new(x, y, z)));
             }
         }
         for z in steps(0.45, 1.2) {
@@ -471,6 +489,31 @@ mod tests {
         scene_of(pts)
     }
 
+    /// The [`armchair`] pushed in under a desk: over its front (x 0.1 to 0.5) the
+    /// underside of a drawer `above` metres over the seat, or a block `above` metres high
+    /// standing on it.
+    fn armchair_under(above: f64, block: bool) -> Scene {
+        armchair(|x, y| match (x >= 0.1 && y.abs() <= 0.3, block) {
+            (false, _) => Vec::new(),
+            (true, false) => vec![0.45 + above],
+            (true, true) => steps(0.45, 0.45 + above).collect(),
+        })
+    }
+
+    /// Asserts that every fit of `fits` faces the desk (+x, within the 20-degree offsets)
+    /// with the pelvis resting on the seat's voxels (0.46 m, contact to 5 mm).
+    fn seated_facing_the_desk(a: &Agent, fits: &[Fit]) {
+        for f in fits {
+            let yaw = f.placement.yaw.to_degrees();
+            assert!(yaw.abs() <= 20.0 + 1e-9, "facing the desk: {yaw}");
+            let bottom = pelvis_bottom(a, f);
+            assert!(
+                (0.455..=0.47).contains(&bottom),
+                "pelvis bottom at {bottom}"
+            );
+        }
+    }
+
     #[test]
     fn a_drawer_over_the_thighs_does_not_lose_the_seat_what_stands_under_them_does() {
         let (a, h) = models();
@@ -478,15 +521,7 @@ mod tests {
         // Seated, the thighs reach 0.14 m above the seat; started 2-4 cm higher, 0.16-0.18.
         let fits = fit_over_the_seat(&a, &h, &armchair_under(0.13, false));
         assert!(!fits.is_empty(), "the drawer lost the seat");
-        for f in &fits {
-            let yaw = f.placement.yaw.to_degrees();
-            assert!(yaw.abs() <= 20.0 + 1e-9, "facing the desk: {yaw}");
-            let bottom = pelvis_bottom(&a, f);
-            assert!(
-                (0.455..=0.47).contains(&bottom),
-                "pelvis bottom at {bottom}"
-            );
-        }
+        seated_facing_the_desk(&a, &fits);
         // Without the last try (no overhang links) nothing fits at any heading.
         let mut strict = h.clone();
         strict.fit.overhang_links.clear();
@@ -494,6 +529,30 @@ mod tests {
         // A block 5 cm high on the seat's front fills the space below the thighs' axis:
         // the lowered body rests on it, not on the seat, and is not stable.
         assert!(fit_over_the_seat(&a, &h, &armchair_under(0.05, true)).is_empty());
+    }
+
+    #[test]
+    fn a_chair_pushed_in_too_far_is_sat_on_at_its_free_rear() {
+        // The armchair of `armchair` with a desk top at 0.72 m reaching back to
+        // x = 0.05, over the place: the upright trunk (0.11 m radius) meets the desk's edge
+        // at every heading there. 0.10 m further back it clears the edge and the chair's
+        // back (x = -0.25) still; 0.15 m back it meets the chair's back.
+        let (a, h) = models();
+        assert_eq!(h.fit.shift_back, [0.05, 0.10, 0.15, 0.20]);
+        let s = armchair(|x, _| if x >= 0.05 { vec![0.72] } else { Vec::new() });
+        let fits = fit_over_the_seat(&a, &h, &s);
+        assert!(!fits.is_empty(), "the desk's edge lost the seat");
+        seated_facing_the_desk(&a, &fits);
+        for f in &fits {
+            let p = f.placement.position;
+            assert!(
+                (p.x + 0.10).abs() < 1e-9 && p.y.abs() < 1e-9,
+                "moved to {p:?}"
+            );
+        }
+        let mut fixed = h.clone();
+        fixed.fit.shift_back.clear();
+        assert!(fit_over_the_seat(&a, &fixed, &s).is_empty());
     }
 
     #[test]

@@ -137,6 +137,11 @@ pub struct FitRule {
     /// lose the seat (the chair is pulled out to sit), while what fills the space below
     /// their axis still stops them (joint indices; an extension of section 4.2).
     pub overhang_links: Vec<usize>,
+    /// Where even the `overhang_links` try fits nothing, the place is tried again moved
+    /// this far back along its own heading, nearest first, metres: the free rear of a seat
+    /// pushed in under a desk lies behind the place the template found there (the chair is
+    /// pulled out to sit); empty: no such try (an extension of section 4.2).
+    pub shift_back: Vec<f64>,
 }
 
 /// How the best pose of a hypothesis, and the strongest of neighbouring detections, are chosen.
@@ -407,6 +412,8 @@ struct FitFile {
     deferred_links: Vec<String>,
     #[serde(default)]
     overhang_links: Vec<String>,
+    #[serde(default)]
+    shift_back: Vec<f64>,
 }
 
 #[derive(Deserialize)]
@@ -605,6 +612,7 @@ impl Hierarchy {
                 unchecked_links,
                 deferred_links,
                 overhang_links,
+                shift_back: f.shift_back.clone(),
             },
             score: ScoreRule {
                 sigma_theta: file.score.sigma_theta.to_radians(),
@@ -818,8 +826,29 @@ fn check_limits(file: &File, src: Source) -> Result<(), ModelError> {
             return Err(src.invalid(&key, format!("{v} is outside {lo}-{hi} ({why})")));
         }
     }
+    let shifts = fit.key("shift_back");
+    if f.shift_back.len() > MAX_SHIFTS {
+        return Err(src.invalid(
+            &shifts,
+            format!(
+                "{} entries, at most {MAX_SHIFTS} (each is a fit at every heading)",
+                f.shift_back.len()
+            ),
+        ));
+    }
+    if let Some(v) = f.shift_back.iter().find(|v| !(0.0..=1.0).contains(*v)) {
+        return Err(src.invalid(
+            &shifts,
+            format!(
+                "{v} is outside 0-1 (metres: a place moved further than a metre is another place)"
+            ),
+        ));
+    }
     Ok(())
 }
+
+/// Most entries of `[fit] shift_back`: each is a fit of the place at every heading.
+const MAX_SHIFTS: usize = 16;
 
 /// Checks the numbers of the hypothesis, fit and score sections.
 fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
@@ -1682,6 +1711,20 @@ mod tests {
         );
         let (e, line) = edited("rise_height = 0.10", "rise_height = -0.1");
         names(&e, line, "hypothesis.rise_height", "positive");
+    }
+
+    #[test]
+    fn a_bad_shift_back_is_named() {
+        let sitting = load(BUILTIN_SITTING).unwrap();
+        assert_eq!(sitting.fit.shift_back, [0.05, 0.10, 0.15, 0.20]);
+        let lying = load(crate::model::set::BUILTIN_LYING).unwrap();
+        assert!(lying.fit.shift_back.is_empty());
+        let from = "shift_back = [0.05, 0.10, 0.15, 0.20]";
+        let (e, line) = edited(from, "shift_back = [0.05, 1.5]");
+        names(&e, line, "fit.shift_back", "1.5 is outside 0-1");
+        let many = format!("shift_back = [{}]", vec!["0.1"; 17].join(", "));
+        let (e, line) = edited(from, &many);
+        names(&e, line, "fit.shift_back", "17 entries, at most 16");
     }
 
     #[test]
