@@ -410,15 +410,10 @@ fn find(
     // candidates alone, and a risen place within the radius of one of them would be
     // suppressed: only the others are tried (the same detections as trying all, but
     // where the fit's last resort, `shift_back`, would have moved a place out of it).
-    let kept_plain = {
-        let ranked: Vec<(bool, &Unfolded)> = candidates.iter().map(|(_, u)| (false, u)).collect();
-        let centres: Vec<Point3<f64>> = candidates
-            .iter()
-            .map(|(_, u)| u.placement.position)
-            .collect();
-        let kept = suppress(&centres, &strongest_first(&ranked, h.score.select), radius);
-        kept.into_iter().map(|k| centres[k]).collect::<Vec<_>>()
-    };
+    let kept_plain: Vec<Point3<f64>> = kept(&candidates, |_| false, h.score.select, radius)
+        .into_iter()
+        .map(|k| candidates[k].1.placement.position)
+        .collect();
     let apart: Vec<usize> = risen
         .into_iter()
         .filter(|&i| {
@@ -432,16 +427,7 @@ fn find(
         candidates.sort_by_key(|(i, _)| *i);
         fits += more_fits;
     }
-    let ranked: Vec<(bool, &Unfolded)> = candidates
-        .iter()
-        .map(|(i, u)| (hyps[*i].risen, u))
-        .collect();
-    let order = strongest_first(&ranked, h.score.select);
-    let centres: Vec<Point3<f64>> = candidates
-        .iter()
-        .map(|(_, u)| u.placement.position)
-        .collect();
-    let kept = suppress(&centres, &order, radius);
+    let kept = kept(&candidates, |i| hyps[i].risen, h.score.select, radius);
     let detections: Vec<Detection> = kept
         .iter()
         .map(|&k| {
@@ -459,6 +445,23 @@ fn find(
             candidates: candidates.len(),
         },
     }
+}
+
+/// The candidates (hypothesis index, pose) that suppression keeps, strongest first
+/// ([`strongest_first`], with `risen` telling which hypotheses' places were found only by
+/// setting a rise aside; [`suppress`] within `radius` metres): indices into `candidates`.
+fn kept(
+    candidates: &[(usize, Unfolded)],
+    risen: impl Fn(usize) -> bool,
+    select: Selection,
+    radius: f64,
+) -> Vec<usize> {
+    let ranked: Vec<(bool, &Unfolded)> = candidates.iter().map(|(i, u)| (risen(*i), u)).collect();
+    let centres: Vec<Point3<f64>> = candidates
+        .iter()
+        .map(|(_, u)| u.placement.position)
+        .collect();
+    suppress(&centres, &strongest_first(&ranked, select), radius)
 }
 
 /// The order in which candidates are kept by suppression: indices into `candidates`

@@ -351,35 +351,47 @@ fn the_seat_a_sofa_arm_hides_from_the_camera_gives_the_armrest() {
     }
 }
 
+/// Height of a desk's top, metres (0.72-0.75 m: the top board 3 cm thick).
+const DESK_TOP: f64 = 0.72;
+
+/// A desk top 1.4 m wide (y -0.7 to 0.7) from x `x0` to `x1` on 3 cm square legs whose
+/// corners nearest the origin stand at `legs` (x, y).
+fn desk_top(x0: f64, x1: f64, legs: &[(f64, f64)]) -> Mesh {
+    let mut desk = Mesh::new();
+    desk.add_box(
+        Point3::new(x0, -0.7, DESK_TOP),
+        Point3::new(x1, 0.7, DESK_TOP + 0.03),
+        Part::Other,
+    );
+    for &(x, y) in legs {
+        desk.add_box(
+            Point3::new(x, y, 0.0),
+            Point3::new(x + 0.03, y + 0.03, DESK_TOP),
+            Part::Other,
+        );
+    }
+    desk
+}
+
 /// An office chair pushed in under a desk whose drawer hangs 0.13 m above the seat, over
 /// its front half: the thighs of the seated body (0.14 m thick) meet the drawer's
 /// underside at every heading, and turned away from the desk the body meets the chair's
 /// back. The chair is pulled out to sit, so the seat is not given up (as in a TUM RGB-D
 /// frame of an office, where both chairs at the desk were missed at 1.75 m). At 1.85 m
 /// the seat's free rear, 0.33 m deep, is narrower than the body's torso template with the
-/// back beside it: no hypothesis, which is another stage's limit.
+/// back beside it; it has been found there too since `rise_height` and `shift_back`,
+/// which `a_seat_half_under_a_desk_top_is_found_with_the_desk_set_aside` and the fit's
+/// tests cover.
 #[test]
 fn a_chair_pushed_in_under_a_desk_drawer_is_still_a_seat() {
     let seat = ChairParams::default();
-    let mut desk = Mesh::new();
-    let top = 0.72;
-    desk.add_box(
-        Point3::new(0.12, -0.7, top),
-        Point3::new(0.9, 0.7, top + 0.03),
-        Part::Other,
-    );
+    let legs = [(0.12, -0.67), (0.12, 0.64), (0.87, -0.67), (0.87, 0.64)];
+    let mut desk = desk_top(0.12, 0.9, &legs);
     desk.add_box(
         Point3::new(0.12, -0.35, seat.seat_height + 0.13),
-        Point3::new(0.7, 0.35, top),
+        Point3::new(0.7, 0.35, DESK_TOP),
         Part::Other,
     );
-    for (x, y) in [(0.12, -0.67), (0.12, 0.64), (0.87, -0.67), (0.87, 0.64)] {
-        desk.add_box(
-            Point3::new(x, y, 0.0),
-            Point3::new(x + 0.03, y + 0.03, top),
-            Part::Other,
-        );
-    }
     let c = cloud(&[chair(&seat), desk]);
     for height in [1.65, 1.75] {
         let o = run(&c, height);
@@ -563,20 +575,7 @@ fn stray_points_and_clumps_over_an_armchair_change_nothing() {
 /// every height.
 #[test]
 fn a_seat_half_under_a_desk_top_is_found_with_the_desk_set_aside() {
-    let mut desk = Mesh::new();
-    let top = 0.72;
-    desk.add_box(
-        Point3::new(0.10, -0.7, top),
-        Point3::new(0.8, 0.7, top + 0.03),
-        Part::Other,
-    );
-    for (x, y) in [(0.77, -0.67), (0.77, 0.64)] {
-        desk.add_box(
-            Point3::new(x, y, 0.0),
-            Point3::new(x + 0.03, y + 0.03, top),
-            Part::Other,
-        );
-    }
+    let desk = desk_top(0.10, 0.8, &[(0.77, -0.67), (0.77, 0.64)]);
     let full = cloud(&[chair(&ChairParams::default()), desk]);
     // The chair under the desk top is hidden from above.
     let seen = PointCloud::new(

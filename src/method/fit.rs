@@ -97,16 +97,15 @@ pub fn fit(
             return fits;
         }
     }
-    if h.fit.overhang_links.is_empty() {
-        return Vec::new();
-    }
     let halved = &h.fit.overhang_links;
-    let fits = fit_checking(agent, h, scene, hyp, contact, &unchecked, halved);
-    if !fits.is_empty() {
-        return fits;
+    if !halved.is_empty() {
+        let fits = fit_checking(agent, h, scene, hyp, contact, &unchecked, halved);
+        if !fits.is_empty() {
+            return fits;
+        }
     }
     let Some(heading) = own_heading(hyp) else {
-        return fits;
+        return Vec::new();
     };
     let back = -nalgebra::Vector3::new(heading.cos(), heading.sin(), 0.0);
     for &d in &h.fit.shift_back {

@@ -137,7 +137,7 @@ pub struct FitRule {
     /// lose the seat (the chair is pulled out to sit), while what fills the space below
     /// their axis still stops them (joint indices; an extension of section 4.2).
     pub overhang_links: Vec<usize>,
-    /// Where even the `overhang_links` try fits nothing, the place is tried again moved
+    /// Where no earlier try fits (`deferred_links`, `overhang_links`), the place is tried again moved
     /// this far back along its own heading, nearest first, metres: the free rear of a seat
     /// pushed in under a desk lies behind the place the template found there (the chair is
     /// pulled out to sit); empty: no such try (an extension of section 4.2).
