@@ -7,11 +7,12 @@
 use std::path::{Path, PathBuf};
 
 use afford::detect::{detect, DetectConfig, Outcome};
-use afford::mesh::{Mesh, Part};
+use afford::mesh::Mesh;
 use afford::model::agent::Agent;
 use afford::model::hierarchy::Hierarchy;
 use afford_synth::furniture::*;
-use nalgebra::Point3;
+
+use crate::common::bar_stool;
 
 /// The hierarchy under test. Angles in degrees, lengths in metres unless "fraction of H".
 const PERCHING: &str = r#"
@@ -93,31 +94,6 @@ fn models(height: f64) -> (Agent, Hierarchy) {
     let dir = tempfile::tempdir().unwrap();
     let h = Hierarchy::load(&write(&dir, PERCHING), &agent).unwrap_or_else(|e| panic!("{e}"));
     (agent, h)
-}
-
-/// A footrest ring around a stool's pedestal: a tube of radius `tube` bent into a circle of
-/// radius `radius` at height `z` (metres), from 32 straight pieces.
-fn footrest_ring(radius: f64, z: f64, tube: f64) -> Mesh {
-    let mut m = Mesh::new();
-    let n = 32;
-    let at = |k: usize| {
-        let t = std::f64::consts::TAU * k as f64 / n as f64;
-        Point3::new(radius * t.cos(), radius * t.sin(), z)
-    };
-    for k in 0..n {
-        m.add_cylinder(at(k), at(k + 1), tube, 12, Part::Other);
-    }
-    m
-}
-
-/// A bar stool (seat 0.75 m, 0.36 m across, on a pedestal), with a footrest ring 0.40 m
-/// below the seat (0.22 m radius, 25 mm tube, as on common bar stools) when `footrest`.
-fn bar_stool(footrest: bool) -> Vec<Mesh> {
-    let mut meshes = vec![stool(&StoolParams::bar())];
-    if footrest {
-        meshes.push(footrest_ring(0.22, 0.35, 0.0125));
-    }
-    meshes
 }
 
 fn run(meshes: &[Mesh], height: f64) -> (Outcome, Agent) {

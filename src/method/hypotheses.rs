@@ -66,7 +66,19 @@ fn hypotheses_in_pieces(
         .surface
         .map(|sr| (sr, map.disc(sr.radius * body_height)));
     let height = rule_.height.map(|t| t.scaled(body_height));
+    // The perch membership, its neighbourhood, and the longest top it holds on (metres).
+    let perch = rule_.perch.map(|p| {
+        (
+            p.height.scaled(body_height),
+            map.disc(p.radius * body_height),
+            p.tolerance,
+            p.max_length * body_height,
+            p.max_walled,
+            p.rim_drop,
+        )
+    });
     let facing_tolerance = rule_.facing_tolerance.unwrap_or(0.0);
+    let available = |[d, r, h]: [f64; 3]| rule_.available.defuzzify(rule(d, r, h)).available;
     // A direction across the surface (descent, facing) as the body's heading.
     let turn = |d: f64| match orientation {
         Orientation::Parallel => d,
@@ -99,6 +111,35 @@ fn hypotheses_in_pieces(
             else {
                 continue;
             };
+            // A seat too high to sit on is perched on where its top is a stool's.
+            let (mean, top, memberships, risen) = perch
+                .as_ref()
+                .filter(|_| !available(memberships))
+                .and_then(|(perch_height, disc, tolerance, longest, walled, rim)| {
+                    let centre = band.height(ix as isize, iy as isize)?;
+                    if perch_height.membership(centre) <= 0.0 {
+                        return None;
+                    }
+                    let mut r = rate_top(
+                        &*band,
+                        ix,
+                        iy,
+                        &template,
+                        height.as_ref(),
+                        rule_,
+                        Some(*tolerance),
+                    )?;
+                    r.memberships[2] = r.memberships[2].max(perch_height.membership(r.mean));
+                    if !available(r.memberships) {
+                        return None;
+                    }
+                    let shape = rimmed_surface(map, ix, iy, disc, r.mean, *tolerance, *rim);
+                    (shape.spread_along > 0.0
+                        && shape.length <= *longest
+                        && shape.walled <= *walled)
+                        .then_some((r.mean, r.top, r.memberships, r.risen))
+                })
+                .unwrap_or((mean, top, memberships, risen));
             let verdict =
                 rule_
                     .available
@@ -291,6 +332,24 @@ pub fn rate(
     height: Option<&Trapezoid>,
     rule_: &HypothesisRule,
 ) -> Option<Rating> {
+    rate_top(map, ix, iy, template, height, rule_, None)
+}
+
+/// [`rate`], or with `small_top` (metres) the rating of a top smaller than the template (a
+/// stool perched on, [`crate::model::hierarchy::PerchRule`]): cells more than `small_top`
+/// below the template's median height count as missing, whether the top's rim drops to
+/// the floor or a ring all round or a stool's pedestal shows through a gap in the map;
+/// cells above it count as roughness (leaves of a plant, things on a cabinet), or with
+/// `rise_height` as a rise, as on any seat.
+fn rate_top(
+    map: &impl Cells,
+    ix: usize,
+    iy: usize,
+    template: &[(isize, isize)],
+    height: Option<&Trapezoid>,
+    rule_: &HypothesisRule,
+    small_top: Option<f64>,
+) -> Option<Rating> {
     let at = |dx: isize, dy: isize| map.height(ix as isize + dx, iy as isize + dy);
     let centre = at(0, 0)?;
     let mut all = Moments::default();
@@ -301,8 +360,9 @@ pub fn rate(
     }
     let mut kept = all;
     let mut risen = false;
-    if all.spread() > rule_.roughness.full
-        && (rule_.hole_depth.is_some() || rule_.rise_height.is_some())
+    if small_top.is_some()
+        || all.spread() > rule_.roughness.full
+            && (rule_.hole_depth.is_some() || rule_.rise_height.is_some())
     {
         let mut hs: Vec<f64> = template.iter().filter_map(|&(dx, dy)| at(dx, dy)).collect();
         let mid = hs.len() / 2;
@@ -338,9 +398,13 @@ pub fn rate(
         };
         kept = Moments::default();
         for &(dx, dy) in template {
-            match at(dx, dy) {
-                Some(h) if h > ceiling => risen = true,
-                Some(h) if h >= floor || !enclosed(dx, dy) => kept.add(h),
+            match (at(dx, dy), small_top) {
+                // Below a small top: its rim's drop, or what shows through it.
+                (Some(h), Some(t)) if h < median - t => {}
+                (Some(h), _) if h > ceiling => risen = true,
+                // Above it (leaves, clutter): roughness, as on any seat.
+                (Some(h), Some(_)) => kept.add(h),
+                (Some(h), None) if h >= floor || !enclosed(dx, dy) => kept.add(h),
                 _ => {}
             }
         }
@@ -434,6 +498,13 @@ pub struct SurfaceShape {
     /// the edge cells overhang the edge on either side; 0 where the place is not on the
     /// surface.
     pub width: f64,
+    /// Length along the long axis, metres, measured as `width` is.
+    pub length: f64,
+    /// Share of the cells bounding the surface (seen, off its level, within the
+    /// neighbourhood) that do not drop far below it ([`surface`]: that stand above it): 0
+    /// for a stool's top, most for a box on a desk or a patch of a desk between the things
+    /// standing on it.
+    pub walled: f64,
 }
 
 impl SurfaceShape {
@@ -457,6 +528,21 @@ pub fn surface(
     neighbourhood: &[(isize, isize)],
     level: f64,
     tolerance: f64,
+) -> SurfaceShape {
+    rimmed_surface(map, ix, iy, neighbourhood, level, tolerance, tolerance)
+}
+
+/// [`surface`], with the share of its bounding cells that do not drop at least `rim`
+/// metres below `level` as [`SurfaceShape::walled`]: a stool's top drops to the floor or
+/// its ring all round, a box on a desk to the desk.
+fn rimmed_surface(
+    map: &impl Cells,
+    ix: usize,
+    iy: usize,
+    neighbourhood: &[(isize, isize)],
+    level: f64,
+    tolerance: f64,
+    rim: f64,
 ) -> SurfaceShape {
     // Some(true): on the surface; Some(false): another height (an edge); None: no data.
     let on = |dx: isize, dy: isize| {
@@ -483,6 +569,8 @@ pub fn surface(
     seen[index(0, 0)] = true;
     let mut stack = vec![(0isize, 0isize)];
     let (mut n, mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    // Cells bounding the surface, and those of them higher than it.
+    let (mut edges, mut walls) = (0.0, 0.0);
     while let Some((dx, dy)) = stack.pop() {
         if on(dx, dy) == Some(true) {
             let (x, y) = (dx as f64 * map.cell_size(), dy as f64 * map.cell_size());
@@ -498,9 +586,20 @@ pub fn surface(
                 continue;
             }
             let k = index(nx, ny);
-            if inside[k] && !seen[k] && on(nx, ny) != Some(false) {
-                seen[k] = true;
-                stack.push((nx, ny));
+            if !inside[k] || seen[k] {
+                continue;
+            }
+            seen[k] = true;
+            match map.height(ix as isize + nx, iy as isize + ny) {
+                Some(h) if (h - level).abs() > tolerance => {
+                    // An edge of the surface: a drop where legs hang, or a step to
+                    // something it stands on or that stands on it.
+                    edges += 1.0;
+                    if h > level - rim {
+                        walls += 1.0;
+                    }
+                }
+                _ => stack.push((nx, ny)),
             }
         }
     }
@@ -517,6 +616,8 @@ pub fn surface(
         // A cell at the edge holds the surface over half its width on average: one cell
         // less than the cells' own spread.
         width: ((12.0 * across).sqrt() - map.cell_size()).max(0.0),
+        length: ((12.0 * along).sqrt() - map.cell_size()).max(0.0),
+        walled: if edges > 0.0 { walls / edges } else { 0.0 },
     }
 }
 
@@ -552,6 +653,7 @@ mod tests {
             available: Availability { rise: [0.3, 0.7] },
             spacing: None,
             surface: None,
+            perch: None,
         }
     }
 
@@ -621,6 +723,77 @@ mod tests {
         assert_eq!(rated(&gaps, 5, 10).memberships[1], 0.0);
         // A smooth place is rated the same by both.
         assert_eq!(rated(&paper, 7, 6), rated(&gaps, 7, 6));
+    }
+
+    #[test]
+    fn a_stool_top_above_seat_height_is_perched_on_and_a_table_top_is_not() {
+        // Body height 1.0 m, 5 cm cells, a template of radius 3 cells: a bar stool's round
+        // top 0.28 m across at 0.75 m, its middle cell showing its pedestal at 0.55 m
+        // through a gap in the map; and a table top 0.90 m square at the same height.
+        let stool = |x: usize, y: usize| {
+            let (dx, dy) = (x as isize - 10, y as isize - 10);
+            match dx * dx + dy * dy {
+                0 => Some(0.55),
+                1..=8 => Some(0.75),
+                _ => Some(0.0),
+            }
+        };
+        let table = |x: usize, y: usize| {
+            Some(if (6..24).contains(&x) && (6..24).contains(&y) {
+                0.75
+            } else {
+                0.0
+            })
+        };
+        let seat = HypothesisRule {
+            template_diameter: 0.3,
+            hole_depth: Some(0.25),
+            ..rule_()
+        };
+        let perching = HypothesisRule {
+            perch: Some(crate::model::hierarchy::PerchRule {
+                height: Trapezoid {
+                    a: 0.6,
+                    b: 0.65,
+                    c: 0.85,
+                    d: 0.9,
+                },
+                radius: 0.4,
+                tolerance: 0.05,
+                max_length: 0.45,
+                max_walled: 0.25,
+                rim_drop: 0.2,
+            }),
+            ..seat.clone()
+        };
+        let found = |f: &dyn Fn(usize, usize) -> Option<f64>, rule: &HypothesisRule| {
+            hypotheses(&map_of(30, f), rule, Orientation::Parallel, 1.0)
+        };
+        // Too high to sit on: nothing without the perch.
+        assert!(found(&stool, &seat).is_empty());
+        let h = found(&stool, &perching);
+        assert!(!h.is_empty());
+        for p in &h {
+            // On the top, at its height (the pedestal's cell is not the top).
+            let (dx, dy) = (p.cell.0 as f64 - 10.0, p.cell.1 as f64 - 10.0);
+            assert!((1.0..=8.0).contains(&(dx * dx + dy * dy)), "{p:?}");
+            assert!((p.position.z - 0.75).abs() < 1e-12, "{p:?}");
+            assert_eq!(p.memberships[1], 1.0, "{p:?}");
+        }
+        // A table top at the same height is too long to perch on, and a box as small as
+        // the stool's top standing on it drops to the table, not the floor, round its rim.
+        assert!(found(&table, &perching).is_empty());
+        let boxed = |x: usize, y: usize| {
+            let on_box = (8..13).contains(&x) && (8..13).contains(&y);
+            table(x, y).map(|h| if on_box { 0.80 } else { h - 0.1 })
+        };
+        assert!(found(&boxed, &perching).is_empty());
+        let alone = |x: usize, y: usize| boxed(x, y).map(|h| if h < 0.75 { 0.0 } else { h });
+        assert!(!found(&alone, &perching).is_empty());
+        // The same top at seat height is a seat by the first membership, perch or not.
+        let low = |x, y| table(x, y).map(|h| h * 0.6);
+        assert_eq!(found(&low, &seat), found(&low, &perching));
+        assert!(!found(&low, &seat).is_empty());
     }
 
     #[test]

@@ -78,6 +78,40 @@ pub struct HypothesisRule {
     /// no width asked and every heading tried where it is flat.
     #[serde(default)]
     pub surface: Option<SurfaceRule>,
+    /// A second height membership for small tops (an extension): where the top round the
+    /// place is no longer than a stool's, a seat higher than `height` allows is perched on
+    /// (a bar stool); absent: `height` alone.
+    #[serde(default)]
+    pub perch: Option<PerchRule>,
+}
+
+/// Seats above the comfortable height that a person perches on, told from table tops by
+/// the size of the top (an extension of section 4.1's height membership): a bar stool is
+/// 0.30-0.45 m across, tables, counters and cabinets 0.6 m and more. Where the top round
+/// a place (the cells within `tolerance` of the template's mean height, reached from the
+/// place, [`crate::method::hypotheses::surface`]) is at most `max_length` long, the
+/// height membership is the larger of the rule's `height` and this one's `height`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PerchRule {
+    /// "Height is comfortable to perch on": mean height under the template, fractions of H.
+    pub height: Trapezoid,
+    /// Radius of the neighbourhood measured, fraction of H: it must reach past the
+    /// longest top that is still a perch.
+    pub radius: f64,
+    /// Cells within this height (metres) of the template's mean height are on the top.
+    pub tolerance: f64,
+    /// Longest top perched on, along its long axis, fraction of H (the extent of a
+    /// rectangle with the same spread: `sqrt(12)` standard deviations of its cells).
+    pub max_length: f64,
+    /// Largest share of the cells bounding the top that may not drop `rim_drop` below it
+    /// (a stool's back on one side), 0 to 1: a top made small by the things standing on
+    /// it (a patch of a cluttered desk), or standing on something (a box on a desk), is no
+    /// perch.
+    pub max_walled: f64,
+    /// Least drop (metres) from the top to a cell bounding it for the cell to be the top's
+    /// rim, where the legs hang: the floor or a stool's ring.
+    pub rim_drop: f64,
 }
 
 /// The flat surface round a place (an extension of section 4.1): the cells at the level of
@@ -780,6 +814,13 @@ fn check_limits(file: &File, src: Source) -> Result<(), ModelError> {
             "fraction of H: beyond two bodies the surface measured is no longer the place's",
         ),
         (
+            hyp.key("perch").key("radius"),
+            h.perch.map_or(0.3, |p| p.radius),
+            0.0,
+            2.0,
+            "fraction of H: beyond two bodies the top measured is no longer the place's",
+        ),
+        (
             Key::top("suppression_radius"),
             file.suppression_radius,
             0.0,
@@ -944,6 +985,37 @@ fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
     ];
     if let Some(t) = h.height {
         sets.push((hyp.key("height"), vec![t.a, t.b, t.c, t.d]));
+    }
+    if let Some(p) = h.perch {
+        let perch = hyp.key("perch");
+        for (key, v) in [
+            ("radius", p.radius),
+            ("tolerance", p.tolerance),
+            ("max_length", p.max_length),
+            ("rim_drop", p.rim_drop),
+        ] {
+            if !Positive.holds(v) {
+                return Err(src.invalid(&perch.key(key), Positive.what(v)));
+            }
+        }
+        if !(0.0..=1.0).contains(&p.max_walled) {
+            return Err(src.invalid(
+                &perch.key("max_walled"),
+                format!("must be a share from 0 to 1, not {}", p.max_walled),
+            ));
+        }
+        if p.max_length > 2.0 * p.radius {
+            return Err(src.invalid(
+                &perch.key("max_length"),
+                format!(
+                    "must be at most the neighbourhood's diameter (2 x radius = {}), not {}",
+                    2.0 * p.radius,
+                    p.max_length
+                ),
+            ));
+        }
+        let t = p.height;
+        sets.push((perch.key("height"), vec![t.a, t.b, t.c, t.d]));
     }
     for (key, points) in sets {
         if points.iter().any(|v| !v.is_finite()) || points.windows(2).any(|w| w[0] > w[1]) {
@@ -1694,6 +1766,29 @@ mod tests {
         );
         let (e, line) = edited("hole_depth = 0.25", "hole_depth = 0.0");
         names(&e, line, "hypothesis.hole_depth", "positive");
+    }
+
+    #[test]
+    fn a_bad_perch_rule_is_named() {
+        let perch = load(BUILTIN_SITTING).unwrap().hypothesis.perch.unwrap();
+        assert!(perch.max_length <= 2.0 * perch.radius);
+        assert!(load(crate::model::set::BUILTIN_LYING)
+            .unwrap()
+            .hypothesis
+            .perch
+            .is_none());
+        let (e, line) = edited("tolerance = 0.05, max_length", "tolerance = 0, max_length");
+        names(&e, line, "hypothesis.perch.tolerance", "positive");
+        let (e, line) = edited("max_length = 0.25", "max_length = 0.7");
+        names(&e, line, "hypothesis.perch.max_length", "diameter");
+        let (e, line) = edited("0.34, 0.36, 0.48, 0.50", "0.34, 0.48, 0.36, 0.50");
+        names(&e, line, "hypothesis.perch.height", "increasing order");
+        let (e, line) = edited("radius = 0.30, tolerance", "radius = 3.0, tolerance");
+        names(&e, line, "hypothesis.perch.radius", "two bodies");
+        let (e, line) = edited("max_walled = 0.25", "max_walled = 1.5");
+        names(&e, line, "hypothesis.perch.max_walled", "share");
+        let (e, line) = edited("rim_drop = 0.20", "rim_drop = -0.2");
+        names(&e, line, "hypothesis.perch.rim_drop", "positive");
     }
 
     #[test]

@@ -6,7 +6,10 @@ use std::path::Path;
 
 use afford::detect::{DetectConfig, DEFAULT_VOXEL};
 use afford::eval::evaluate;
+use afford::mesh::{Mesh, Part};
 use afford::model::set::ModelChoice;
+use afford_synth::furniture::{stool, StoolParams};
+use nalgebra::Point3;
 
 /// `(height in mm, affordance) -> F` of the main (non-doubtful) rows of an eval CSV.
 pub(crate) fn baseline(path: &Path) -> BTreeMap<(u32, String), f64> {
@@ -72,4 +75,31 @@ pub(crate) fn drops_below(
 fn millimetres(height: f64) -> u32 {
     // At most 3000: a u32 holds it.
     (height * 1000.0).round() as u32
+}
+
+// Furniture shared by the topics.
+
+/// A footrest ring around a stool's pedestal: a tube of radius `tube` bent into a circle of
+/// radius `radius` at height `z` (metres), from 32 straight pieces.
+pub(crate) fn footrest_ring(radius: f64, z: f64, tube: f64) -> Mesh {
+    let mut m = Mesh::new();
+    let n = 32;
+    let at = |k: usize| {
+        let t = std::f64::consts::TAU * k as f64 / n as f64;
+        Point3::new(radius * t.cos(), radius * t.sin(), z)
+    };
+    for k in 0..n {
+        m.add_cylinder(at(k), at(k + 1), tube, 12, Part::Other);
+    }
+    m
+}
+
+/// A bar stool (seat 0.75 m, 0.36 m across, on a pedestal), with a footrest ring 0.40 m
+/// below the seat (0.22 m radius, 25 mm tube, as on common bar stools) when `footrest`.
+pub(crate) fn bar_stool(footrest: bool) -> Vec<Mesh> {
+    let mut meshes = vec![stool(&StoolParams::bar())];
+    if footrest {
+        meshes.push(footrest_ring(0.22, 0.35, 0.0125));
+    }
+    meshes
 }

@@ -7,7 +7,8 @@
 //!
 //! Labels follow from construction (see [`Labels`]):
 //! * `sitting`: a seat 0.25–0.55 m high with the feet on the floor (chairs, stools,
-//!   sofas, recliners, benches, beds). Bar stools (seat 0.65–0.80 m) are labelled 0. Low tables at seat
+//!   sofas, recliners, benches, beds), and bar stools (seat 0.65–0.80 m, 0.30–0.42 m
+//!   across), perched on with the feet on their ring or the floor. Low tables at seat
 //!   height are sittable by geometry but negative by convention: `sitting` 0 and a
 //!   non-empty `doubtful` column, so that evaluation can report them apart;
 //! * `backrest`: a back reaching at least 0.25 m above the seat, or (kind `wall`) a wall within
@@ -177,7 +178,7 @@ pub const LEGS_RAISED_DEG: (f64, f64) = (15.0, 40.0);
 pub enum Class {
     /// Backless stool, seat 0.42–0.50 m.
     Stool,
-    /// Bar stool, seat 0.65–0.80 m (negative for sitting).
+    /// Bar stool, seat 0.65–0.80 m, perched on (a seat, docs/conventions.md).
     BarStool,
     /// Chair with a back, without arms.
     Chair,
@@ -668,7 +669,7 @@ pub fn make_object(class: Class, rng: &mut ChaCha8Rng) -> Object {
                 }
             }
             let labels = Labels {
-                sitting: !bar,
+                sitting: true,
                 ..Labels::default()
             };
             seat_obj(m, seat, labels)
@@ -1320,7 +1321,7 @@ pub(super) fn one_scene(kind: SceneKind, class: Class, seed: u64, spec: &Dataset
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let obj = make_object(class, &mut rng);
     let yaw = u(&mut rng, -180.0, 180.0);
-    let seating = obj.labels.sitting || class == Class::BarStool;
+    let seating = obj.labels.sitting;
     // Azimuth of the camera relative to the object's front, degrees.
     let rel_az = |rng: &mut ChaCha8Rng, wall: bool| {
         if wall {
@@ -1820,7 +1821,11 @@ mod tests {
             assert!((0.42..=0.50 + 1e-9).contains(&seat), "{seat}");
 
             let b = obj(Class::BarStool, seed);
-            assert_eq!(b.labels, Labels::default());
+            let perched = Labels {
+                sitting: true,
+                ..Labels::default()
+            };
+            assert_eq!(b.labels, perched);
             assert!(top_of(&b.mesh, Part::Seat).unwrap() >= 0.65 - 1e-9);
 
             let c = obj(Class::Chair, seed);
@@ -2167,8 +2172,10 @@ mod tests {
         assert!(v.labels.sitting && !v.labels.backrest);
         // Everything seen is within range of a camera 1.5–3 m away, on or above the floor.
         assert!(v.points.iter().all(|p| p.z > -0.05 && p.x.abs() < 8.0));
+        // A bar stool is perched on, and leant back against the wall behind it.
         let b = one_scene(SceneKind::Wall, Class::BarStool, 5, &spec);
-        assert_eq!(b.labels, Labels::default());
+        assert!(b.labels.sitting && b.labels.backrest && b.labels.headrest);
+        assert!(!b.labels.armrest && !b.labels.lying);
     }
 
     #[test]

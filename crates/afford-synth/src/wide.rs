@@ -946,7 +946,8 @@ pub fn make_wide_object(class: Class, rng: &mut ChaCha8Rng) -> Object {
     } else {
         super::dataset::make_object(class, rng)
     };
-    if o.labels.sitting && chance(rng, THINGS_ON_SEATS_P) {
+    // A bar stool's top holds one person and nothing beside them.
+    if o.labels.sitting && o.class != Class::BarStool && chance(rng, THINGS_ON_SEATS_P) {
         put_thing_on_seat(&mut o.mesh, rng);
     }
     o
@@ -1109,7 +1110,8 @@ pub(super) fn one_scene_wide(
             let r = footprint_radius(&obj.mesh);
             let rel = if wall {
                 u(&mut rng, -70.0, 70.0)
-            } else if obj.labels.sitting && chance(&mut rng, 0.85) {
+            } else if obj.labels.sitting && obj.class != Class::BarStool && chance(&mut rng, 0.85) {
+                // Seen mostly from the front; a bar stool has no front.
                 u(&mut rng, -80.0, 80.0)
             } else {
                 u(&mut rng, -180.0, 180.0)
