@@ -133,7 +133,8 @@ fn hypotheses_in_pieces(
                     if !available(r.memberships) {
                         return None;
                     }
-                    let shape = rimmed_surface(map, ix, iy, disc, r.mean, *tolerance, *rim);
+                    let shape =
+                        rimmed_surface(map, ix, iy, disc, r.mean, *tolerance, *rim, Some(*longest));
                     (shape.spread_along > 0.0
                         && shape.length <= *longest
                         && shape.walled <= *walled)
@@ -529,12 +530,23 @@ pub fn surface(
     level: f64,
     tolerance: f64,
 ) -> SurfaceShape {
-    rimmed_surface(map, ix, iy, neighbourhood, level, tolerance, tolerance)
+    rimmed_surface(
+        map,
+        ix,
+        iy,
+        neighbourhood,
+        level,
+        tolerance,
+        tolerance,
+        None,
+    )
 }
 
 /// [`surface`], with the share of its bounding cells that do not drop at least `rim`
 /// metres below `level` as [`SurfaceShape::walled`]: a stool's top drops to the floor or
-/// its ring all round, a box on a desk to the desk.
+/// its ring all round, a box on a desk to the desk. With `longest` (metres), a surface
+/// with too many cells to be at most that long is given up early, as of infinite length.
+#[allow(clippy::too_many_arguments)]
 fn rimmed_surface(
     map: &impl Cells,
     ix: usize,
@@ -543,6 +555,7 @@ fn rimmed_surface(
     level: f64,
     tolerance: f64,
     rim: f64,
+    longest: Option<f64>,
 ) -> SurfaceShape {
     // Some(true): on the surface; Some(false): another height (an edge); None: no data.
     let on = |dx: isize, dy: isize| {
@@ -571,10 +584,24 @@ fn rimmed_surface(
     let (mut n, mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     // Cells bounding the surface, and those of them higher than it.
     let (mut edges, mut walls) = (0.0, 0.0);
+    // n cells of side c spread at least as a disc of their area does: the spreads'
+    // squares sum to at least n c^2 / (2 pi) - c^2 / 6 (each cell's own spread), so the
+    // long axis's length is at least c sqrt(3 n / pi - 1) - c; more cells than this
+    // cannot be `longest` long (one cell of margin for rounding).
+    let most = longest.map(|l| {
+        let c = l / map.cell_size() + 1.0;
+        std::f64::consts::FRAC_PI_3 * (c * c + 1.0) + 1.0
+    });
     while let Some((dx, dy)) = stack.pop() {
         if on(dx, dy) == Some(true) {
             let (x, y) = (dx as f64 * map.cell_size(), dy as f64 * map.cell_size());
             n += 1.0;
+            if most.is_some_and(|m| n > m) {
+                return SurfaceShape {
+                    length: f64::INFINITY,
+                    ..SurfaceShape::default()
+                };
+            }
             sx += x;
             sy += y;
             sxx += x * x;
@@ -794,6 +821,48 @@ mod tests {
         let low = |x, y| table(x, y).map(|h| h * 0.6);
         assert_eq!(found(&low, &seat), found(&low, &perching));
         assert!(!found(&low, &seat).is_empty());
+    }
+
+    #[test]
+    fn a_top_given_up_early_is_longer_than_asked() {
+        // Discs and rectangles of every size up to the neighbourhood's: wherever the
+        // flood gives up early, the whole top is longer than asked; elsewhere it is the
+        // same shape.
+        let disc = map_of(1, |_, _| None).disc(0.5);
+        let mut given_up = 0;
+        for size in 1..=18 {
+            let half = size as f64 / 2.0;
+            let round = |x: usize, y: usize| {
+                let (dx, dy) = (x as f64 - 20.0, y as f64 - 20.0);
+                Some(if dx * dx + dy * dy <= half * half {
+                    0.7
+                } else {
+                    0.0
+                })
+            };
+            let oblong = |x: usize, y: usize| {
+                let (dx, dy) = ((x as f64 - 20.0).abs(), (y as f64 - 20.0).abs());
+                Some(if dx <= half && dy <= half / 2.0 {
+                    0.7
+                } else {
+                    0.0
+                })
+            };
+            for m in [map_of(41, round), map_of(41, oblong)] {
+                let whole = rimmed_surface(&m, 20, 20, &disc, 0.7, 0.05, 0.2, None);
+                for k in 1..=18 {
+                    let longest = 0.05 * k as f64;
+                    let early = rimmed_surface(&m, 20, 20, &disc, 0.7, 0.05, 0.2, Some(longest));
+                    if early.length.is_infinite() {
+                        assert!(whole.length > longest, "{size}, {longest}: {whole:?}");
+                        given_up += 1;
+                    } else {
+                        assert_eq!(early, whole, "{size}, {longest}");
+                    }
+                }
+            }
+        }
+        assert!(given_up > 100, "{given_up}");
     }
 
     #[test]
