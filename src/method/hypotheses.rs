@@ -5,7 +5,7 @@ use nalgebra::{Matrix3, Point3, Vector3};
 
 use crate::method::fuzzy::{rule, Trapezoid};
 use crate::method::heightmap::{Cells, HeightMap};
-use crate::model::hierarchy::{HypothesisRule, Orientation};
+use crate::model::hierarchy::{HypothesisRule, Orientation, PerchRule};
 use crate::num::{to_isize, to_usize};
 use rayon::prelude::*;
 
@@ -66,19 +66,8 @@ fn hypotheses_in_pieces(
         .surface
         .map(|sr| (sr, map.disc(sr.radius * body_height)));
     let height = rule_.height.map(|t| t.scaled(body_height));
-    // The perch membership, its neighbourhood, and the longest top it holds on (metres).
-    let perch = rule_.perch.map(|p| {
-        (
-            p.height.scaled(body_height),
-            map.disc(p.radius * body_height),
-            p.tolerance,
-            p.max_length * body_height,
-            p.max_walled,
-            p.rim_drop,
-        )
-    });
+    let perch = rule_.perch.map(|p| Perch::new(&p, map, body_height));
     let facing_tolerance = rule_.facing_tolerance.unwrap_or(0.0);
-    let available = |[d, r, h]: [f64; 3]| rule_.available.defuzzify(rule(d, r, h)).available;
     // A direction across the surface (descent, facing) as the body's heading.
     let turn = |d: f64| match orientation {
         Orientation::Parallel => d,
@@ -102,45 +91,21 @@ fn hypotheses_in_pieces(
         }
         // Tiles of the map that no point reaches hold no valid cell to rate.
         for ix in map.stored_columns(iy, step) {
-            let Some(Rating {
+            let Some(plain) = rate(&*band, ix, iy, &template, height.as_ref(), rule_) else {
+                continue;
+            };
+            // A seat too high to sit on is perched on where its top is a stool's.
+            let Rating {
                 mean,
                 top,
                 memberships,
                 risen,
-            }) = rate(&*band, ix, iy, &template, height.as_ref(), rule_)
-            else {
-                continue;
+            } = match &perch {
+                Some(p) if !available(rule_, plain.memberships) => p
+                    .rate(map, &*band, ix, iy, &template, height.as_ref(), rule_)
+                    .unwrap_or(plain),
+                _ => plain,
             };
-            // A seat too high to sit on is perched on where its top is a stool's.
-            let (mean, top, memberships, risen) = perch
-                .as_ref()
-                .filter(|_| !available(memberships))
-                .and_then(|(perch_height, disc, tolerance, longest, walled, rim)| {
-                    let centre = band.height(ix as isize, iy as isize)?;
-                    if perch_height.membership(centre) <= 0.0 {
-                        return None;
-                    }
-                    let mut r = rate_top(
-                        &*band,
-                        ix,
-                        iy,
-                        &template,
-                        height.as_ref(),
-                        rule_,
-                        Some(*tolerance),
-                    )?;
-                    r.memberships[2] = r.memberships[2].max(perch_height.membership(r.mean));
-                    if !available(r.memberships) {
-                        return None;
-                    }
-                    let shape =
-                        rimmed_surface(map, ix, iy, disc, r.mean, *tolerance, *rim, Some(*longest));
-                    (shape.spread_along > 0.0
-                        && shape.length <= *longest
-                        && shape.walled <= *walled)
-                        .then_some((r.mean, r.top, r.memberships, r.risen))
-                })
-                .unwrap_or((mean, top, memberships, risen));
             let verdict =
                 rule_
                     .available
@@ -199,6 +164,74 @@ fn hypotheses_in_pieces(
         })
         .collect();
     pieces.concat()
+}
+
+/// Whether memberships `[discontinuity, roughness, height]` make a place available (the
+/// rule and its defuzzification, Fig. 5).
+fn available(rule_: &HypothesisRule, [d, r, h]: [f64; 3]) -> bool {
+    rule_.available.defuzzify(rule(d, r, h)).available
+}
+
+/// A [`PerchRule`] for one body height: its membership scaled, the neighbourhood its top
+/// is measured over, and its lengths in metres.
+struct Perch {
+    height: Trapezoid,
+    disc: Vec<(isize, isize)>,
+    tolerance: f64,
+    longest: f64,
+    max_walled: f64,
+    rim_drop: f64,
+}
+
+impl Perch {
+    fn new(p: &PerchRule, map: &HeightMap, body_height: f64) -> Self {
+        Perch {
+            height: p.height.scaled(body_height),
+            disc: map.disc(p.radius * body_height),
+            tolerance: p.tolerance,
+            longest: p.max_length * body_height,
+            max_walled: p.max_walled,
+            rim_drop: p.rim_drop,
+        }
+    }
+
+    /// The rating of cell `(ix, iy)` as a small top perched on, where it is one: its own
+    /// cell at perching height, available as a small top ([`rate_top`]) with the larger
+    /// of the two height memberships, and the top round it short and dropping round its
+    /// rim ([`rimmed_surface`]). `band` holds the template's rows, `map` the rest.
+    #[allow(clippy::too_many_arguments)]
+    fn rate(
+        &self,
+        map: &HeightMap,
+        band: &impl Cells,
+        ix: usize,
+        iy: usize,
+        template: &[(isize, isize)],
+        height: Option<&Trapezoid>,
+        rule_: &HypothesisRule,
+    ) -> Option<Rating> {
+        let centre = band.height(ix as isize, iy as isize)?;
+        if self.height.membership(centre) <= 0.0 {
+            return None;
+        }
+        let mut r = rate_top(band, ix, iy, template, height, rule_, Some(self.tolerance))?;
+        r.memberships[2] = r.memberships[2].max(self.height.membership(r.mean));
+        if !available(rule_, r.memberships) {
+            return None;
+        }
+        let top = rimmed_surface(
+            map,
+            ix,
+            iy,
+            &self.disc,
+            r.mean,
+            self.tolerance,
+            self.rim_drop,
+            Some(self.longest),
+        );
+        (top.spread_along > 0.0 && top.length <= self.longest && top.walled <= self.max_walled)
+            .then_some(r)
+    }
 }
 
 /// Rows of a band of the map whose cells are rated from one copy: 64 rows and the 2 x 8
@@ -337,7 +370,7 @@ pub fn rate(
 }
 
 /// [`rate`], or with `small_top` (metres) the rating of a top smaller than the template (a
-/// stool perched on, [`crate::model::hierarchy::PerchRule`]): cells more than `small_top`
+/// stool perched on, [`PerchRule`]): cells more than `small_top`
 /// below the template's median height count as missing, whether the top's rim drops to
 /// the floor or a ring all round or a stool's pedestal shows through a gap in the map;
 /// cells above it count as roughness (leaves of a plant, things on a cabinet), or with
@@ -582,7 +615,7 @@ fn rimmed_surface(
     seen[index(0, 0)] = true;
     let mut stack = vec![(0isize, 0isize)];
     let (mut n, mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    // Cells bounding the surface, and those of them higher than it.
+    // Cells bounding the surface, and those of them that do not drop `rim` below it.
     let (mut edges, mut walls) = (0.0, 0.0);
     // n cells of side c spread at least as a disc of their area does: the spreads'
     // squares sum to at least n c^2 / (2 pi) - c^2 / 6 (each cell's own spread), so the

@@ -89,8 +89,10 @@ pub struct HypothesisRule {
 /// the size of the top (an extension of section 4.1's height membership): a bar stool is
 /// 0.30-0.45 m across, tables, counters and cabinets 0.6 m and more. Where the top round
 /// a place (the cells within `tolerance` of the template's mean height, reached from the
-/// place, [`crate::method::hypotheses::surface`]) is at most `max_length` long, the
-/// height membership is the larger of the rule's `height` and this one's `height`.
+/// place, as [`crate::method::hypotheses::surface`] measures it) is at most `max_length`
+/// long and drops `rim_drop` round all but `max_walled` of its rim, the place is rated as
+/// a small top (what lies below its level missing) with the larger of the rule's
+/// `height` and this one's `height`.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PerchRule {
