@@ -580,12 +580,30 @@ fn read_binary_body<R: BufRead>(
                 let whole = (b.len() / size).min(left);
                 if whole > 0 {
                     let bytes = whole * size;
-                    out.extend(b[..bytes].chunks_exact(*size).map(|b| {
-                        for &(k, off, s) in fields {
-                            vals[k] = s.decode(&b[off..], big);
-                        }
-                        Point3::new(vals[0], vals[1], vals[2])
-                    }));
+                    let rows = b[..bytes].chunks_exact(*size);
+                    if let Some(at) = f32_offsets(fields) {
+                        // x, y and z all `float`: decoded at fixed offsets, the same
+                        // values as `Scalar::decode` gives.
+                        let get = |b: &[u8], off: usize| {
+                            let mut a = [0u8; 4];
+                            a.copy_from_slice(&b[off..off + 4]);
+                            f64::from(if big {
+                                f32::from_be_bytes(a)
+                            } else {
+                                f32::from_le_bytes(a)
+                            })
+                        };
+                        out.extend(
+                            rows.map(|b| Point3::new(get(b, at[0]), get(b, at[1]), get(b, at[2]))),
+                        );
+                    } else {
+                        out.extend(rows.map(|b| {
+                            for &(k, off, s) in fields {
+                                vals[k] = s.decode(&b[off..], big);
+                            }
+                            Point3::new(vals[0], vals[1], vals[2])
+                        }));
+                    }
                     src.r.consume(bytes);
                     src.pos += bytes as u64;
                     i += whole as u64;
@@ -613,6 +631,19 @@ fn read_binary_body<R: BufRead>(
 /// One of x, y, z in a binary row of scalars: its index in `xyz`, its byte offset in the
 /// row and its type.
 type RowField = (usize, usize, Scalar);
+
+/// The byte offsets of x, y and z in a row when `fields` sets each of them from a
+/// `float` (the common layout, decoded without a per-field dispatch); `None` otherwise.
+fn f32_offsets(fields: &[RowField]) -> Option<[usize; 3]> {
+    let mut at = [None; 3];
+    for &(k, off, s) in fields {
+        if s != Scalar::F32 {
+            return None;
+        }
+        *at.get_mut(k)? = Some(off);
+    }
+    Some([at[0]?, at[1]?, at[2]?])
+}
 
 /// For an element of scalar properties only: the size of a binary row (bytes), and the
 /// [`RowField`] of each of x, y, z that [`read_binary_body`] sets (the first of `xyz`
@@ -1082,6 +1113,54 @@ mod tests {
             let p = file(&dir, "b.ply", &binary_file(big, &pts));
             let got = read_ply(&p).unwrap();
             let want: Vec<_> = pts.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
+            assert_eq!(got, want, "big endian: {big}");
+        }
+    }
+
+    #[test]
+    fn float_coordinates_in_any_order_among_other_properties() {
+        // x, y, z all `float` (read at fixed offsets) in the order z, x, y with a `uchar`
+        // and a `double` between them, 5 000 rows (batches and rows across the buffer).
+        let dir = tempfile::tempdir().unwrap();
+        let pts: Vec<[f32; 3]> = (0..5_000u16)
+            .map(|i| {
+                let i = f32::from(i);
+                [i * 0.125 - 90.0, -i / 64.0, 1e-3 * i + 0.5]
+            })
+            .collect();
+        for big in [false, true] {
+            let mut b = format!(
+                "ply\nformat binary_{}_endian 1.0\nelement vertex {}\nproperty float z\n\
+                 property uchar flag\nproperty float x\nproperty double w\n\
+                 property float y\nend_header\n",
+                if big { "big" } else { "little" },
+                pts.len()
+            )
+            .into_bytes();
+            for p in &pts {
+                let mut put = |v: &[u8]| b.extend_from_slice(v);
+                let f = |x: f32| {
+                    if big {
+                        x.to_be_bytes()
+                    } else {
+                        x.to_le_bytes()
+                    }
+                };
+                put(&f(p[2]));
+                put(&[7]);
+                put(&f(p[0]));
+                put(&(if big {
+                    2.5f64.to_be_bytes()
+                } else {
+                    2.5f64.to_le_bytes()
+                }));
+                put(&f(p[1]));
+            }
+            let got = read_ply(&file(&dir, "f.ply", &b)).unwrap();
+            let want: Vec<_> = pts
+                .iter()
+                .map(|p| Point3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2])))
+                .collect();
             assert_eq!(got, want, "big endian: {big}");
         }
     }
