@@ -457,27 +457,68 @@ fn read_binary<R: Read>(
 ) -> Result<Vec<Point3<f64>>, CloudError> {
     too_big(path, h, h.record as u64, body_len)?;
     let mut out = Vec::with_capacity(capacity(h.points, MAX_PREALLOC));
-    let mut row = vec![0u8; h.record];
-    for i in 0..h.points {
-        r.read_exact(&mut row).map_err(|e| {
-            if e.kind() == io::ErrorKind::UnexpectedEof {
-                body_err(
-                    path,
-                    format!("byte {}", h.len + i * h.record as u64),
-                    format!("file ends inside point {i} of {}", h.points),
-                )
-            } else {
-                io_err(path, e)
-            }
-        })?;
-        let mut c = [0f64; 3];
-        for (k, &(fi, off, _)) in h.xyz.iter().enumerate() {
-            let f = &h.fields[fi];
-            c[k] = f.decode(&row[off..off + f.size]);
+    // Whole blocks of records at a time; x, y and z all `F 4` (the common layout) are
+    // read at fixed offsets, the others through `Field::decode` (the same values).
+    let f32_at = h
+        .xyz
+        .iter()
+        .all(|&(fi, _, _)| h.fields[fi].ty == b'F' && h.fields[fi].size == 4)
+        .then(|| h.xyz.map(|(_, off, _)| off));
+    let block_rows = (BLOCK_BYTES / h.record.max(1)).max(1);
+    let mut block = vec![0u8; block_rows * h.record];
+    let mut done: u64 = 0;
+    while done < h.points {
+        let rows = usize::try_from(h.points - done).map_or(block_rows, |n| n.min(block_rows));
+        let want = &mut block[..rows * h.record];
+        let got = fill(r, want).map_err(|e| io_err(path, e))?;
+        if got < want.len() {
+            let i = done + (got / h.record) as u64;
+            return Err(body_err(
+                path,
+                format!("byte {}", h.len + i * h.record as u64),
+                format!("file ends inside point {i} of {}", h.points),
+            ));
         }
-        out.push(Point3::from(c));
+        let records = want.chunks_exact(h.record);
+        if let Some(at) = f32_at {
+            let get = |row: &[u8], off: usize| {
+                let mut a = [0u8; 4];
+                a.copy_from_slice(&row[off..off + 4]);
+                f64::from(f32::from_le_bytes(a))
+            };
+            out.extend(
+                records.map(|row| Point3::new(get(row, at[0]), get(row, at[1]), get(row, at[2]))),
+            );
+        } else {
+            out.extend(records.map(|row| {
+                let mut c = [0f64; 3];
+                for (k, &(fi, off, _)) in h.xyz.iter().enumerate() {
+                    let f = &h.fields[fi];
+                    c[k] = f.decode(&row[off..off + f.size]);
+                }
+                Point3::from(c)
+            }));
+        }
+        done += rows as u64;
     }
     Ok(out)
+}
+
+/// Bytes of records [`read_binary`] reads at a time (rounded down to whole records).
+const BLOCK_BYTES: usize = 1 << 16;
+
+/// Reads into `buf` until it is full or the input ends; the number of bytes read.
+fn fill<R: Read>(r: &mut R, buf: &mut [u8]) -> io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match r.read(&mut buf[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
 }
 
 fn read_compressed<R: Read>(
@@ -812,6 +853,37 @@ mod tests {
                     && what.contains("only 98 bytes")),
             "{e}"
         );
+    }
+
+    #[test]
+    fn binary_float_coordinates_across_blocks() {
+        // x, y, z all `F 4` (read at fixed offsets) after another float field and in the
+        // order z, x, y; 10 000 records of 20 bytes cross several 64 KiB blocks.
+        let dir = tempfile::tempdir().unwrap();
+        let pts: Vec<[f32; 3]> = (0..10_000u16)
+            .map(|i| {
+                let i = f32::from(i);
+                [i * 0.25 - 1000.0, -i / 128.0, 1e-3 * i]
+            })
+            .collect();
+        let mut b = format!(
+            "VERSION 0.7\nFIELDS intensity z x y rgb\nSIZE 4 4 4 4 4\nTYPE F F F F U\n\
+             COUNT 1 1 1 1 1\nWIDTH {n}\nHEIGHT 1\nPOINTS {n}\nDATA binary\n",
+            n = pts.len()
+        )
+        .into_bytes();
+        for p in &pts {
+            for v in [9.5f32, p[2], p[0], p[1]] {
+                b.extend_from_slice(&v.to_le_bytes());
+            }
+            b.extend_from_slice(&0x00ff_00ffu32.to_le_bytes());
+        }
+        let got = read_pcd(&file(&dir, "f.pcd", &b)).unwrap();
+        let want: Vec<_> = pts
+            .iter()
+            .map(|p| Point3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2])))
+            .collect();
+        assert_eq!(got, want);
     }
 
     #[test]
