@@ -581,6 +581,26 @@ fn read_compressed<R: Read>(
         .iter()
         .map(|&(fi, _, _)| (col(fi), &h.fields[fi]))
         .collect();
+    if cols
+        .iter()
+        .all(|(_, f)| f.ty == b'F' && f.size == 4 && f.count == 1)
+    {
+        // x, y and z all `F 4` with one value each (the common layout): three columns of
+        // floats read side by side, the same values as `Field::decode`.
+        let column = |k: usize| data[cols[k].0..cols[k].0 + 4 * n].chunks_exact(4);
+        let get = |b: &[u8]| {
+            let mut a = [0u8; 4];
+            a.copy_from_slice(b);
+            f64::from(f32::from_le_bytes(a))
+        };
+        out.extend(
+            column(0)
+                .zip(column(1))
+                .zip(column(2))
+                .map(|((x, y), z)| Point3::new(get(x), get(y), get(z))),
+        );
+        return Ok(out);
+    }
     for i in 0..n {
         let mut c = [0f64; 3];
         for (k, (start, f)) in cols.iter().enumerate() {
@@ -595,7 +615,13 @@ fn read_compressed<R: Read>(
 /// Decompresses LZF (liblzf format) data that must expand to exactly `out_len` bytes.
 /// On error returns the input offset and what is wrong.
 fn lzf_decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, (usize, String)> {
-    let mut out = Vec::with_capacity(out_len);
+    // Written through a cursor into the declared size: no growth check per token, and
+    // most tokens are short (a float's shared exponent and high mantissa, 3-4 bytes), so
+    // where there is room a whole 32-byte literal or 16-byte reference is moved at once
+    // (a fixed size, without a call); the bytes past the token's end are written again by
+    // the tokens after it, which continue from there to `out_len`.
+    let mut out = vec![0u8; out_len];
+    let mut o = 0;
     let mut i = 0;
     let overflow = |at: usize| {
         Err((
@@ -609,16 +635,21 @@ fn lzf_decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, (usize, Strin
         i += 1;
         if ctrl < 32 {
             let len = ctrl + 1;
-            let Some(lit) = input.get(i..i + len) else {
+            if input.len() - i < len {
                 return Err((
                     start,
                     "literal run goes past the end of the compressed data".into(),
                 ));
-            };
-            if out.len() + len > out_len {
+            }
+            if out_len - o < len {
                 return overflow(start);
             }
-            out.extend_from_slice(lit);
+            if input.len() - i >= 32 && out_len - o >= 32 {
+                out[o..o + 32].copy_from_slice(&input[i..i + 32]);
+            } else {
+                out[o..o + len].copy_from_slice(&input[i..i + len]);
+            }
+            o += len;
             i += len;
         } else {
             let mut len = ctrl >> 5;
@@ -635,26 +666,32 @@ fn lzf_decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, (usize, Strin
             i += 1;
             let back = ((ctrl & 0x1f) << 8) + usize::from(b) + 1;
             len += 2;
-            if back > out.len() {
+            if back > o {
                 return Err((start, "back reference before the start of the data".into()));
             }
-            if out.len() + len > out_len {
+            if out_len - o < len {
                 return overflow(start);
             }
-            let from = out.len() - back;
-            for k in 0..len {
-                let c = out[from + k];
-                out.push(c);
+            let from = o - back;
+            let (done, rest) = out.split_at_mut(o);
+            if back >= 16 && len <= 16 && rest.len() >= 16 {
+                rest[..16].copy_from_slice(&done[from..from + 16]);
+            } else if back >= len {
+                rest[..len].copy_from_slice(&done[from..from + len]);
+            } else {
+                // Overlapping its own output: byte by byte it repeats the last `back`
+                // bytes.
+                for k in 0..len {
+                    out[o + k] = out[from + k];
+                }
             }
+            o += len;
         }
     }
-    if out.len() != out_len {
+    if o != out_len {
         return Err((
             input.len(),
-            format!(
-                "compressed data expands to {} bytes, expected {out_len}",
-                out.len()
-            ),
+            format!("compressed data expands to {o} bytes, expected {out_len}"),
         ));
     }
     Ok(out)
@@ -764,6 +801,125 @@ mod tests {
         let c = lzf_compress(&data);
         assert!(c.len() < data.len() / 4, "{}", c.len());
         assert_eq!(lzf_decompress(&c, data.len()).unwrap(), data);
+    }
+
+    /// The LZF decoder as first written (a byte pushed at a time): the reference the
+    /// decoder's results and errors must equal.
+    fn lzf_reference(input: &[u8], out_len: usize) -> Result<Vec<u8>, (usize, String)> {
+        let mut out = Vec::with_capacity(out_len);
+        let mut i = 0;
+        let overflow = |at: usize| {
+            Err((
+                at,
+                format!("compressed data expands past the declared {out_len} bytes"),
+            ))
+        };
+        while i < input.len() {
+            let start = i;
+            let ctrl = usize::from(input[i]);
+            i += 1;
+            if ctrl < 32 {
+                let len = ctrl + 1;
+                let Some(lit) = input.get(i..i + len) else {
+                    return Err((
+                        start,
+                        "literal run goes past the end of the compressed data".into(),
+                    ));
+                };
+                if out.len() + len > out_len {
+                    return overflow(start);
+                }
+                out.extend_from_slice(lit);
+                i += len;
+            } else {
+                let mut len = ctrl >> 5;
+                if len == 7 {
+                    let Some(&b) = input.get(i) else {
+                        return Err((start, "back reference cut off".into()));
+                    };
+                    len += usize::from(b);
+                    i += 1;
+                }
+                let Some(&b) = input.get(i) else {
+                    return Err((start, "back reference cut off".into()));
+                };
+                i += 1;
+                let back = ((ctrl & 0x1f) << 8) + usize::from(b) + 1;
+                len += 2;
+                if back > out.len() {
+                    return Err((start, "back reference before the start of the data".into()));
+                }
+                if out.len() + len > out_len {
+                    return overflow(start);
+                }
+                let from = out.len() - back;
+                for k in 0..len {
+                    let c = out[from + k];
+                    out.push(c);
+                }
+            }
+        }
+        if out.len() != out_len {
+            return Err((
+                input.len(),
+                format!(
+                    "compressed data expands to {} bytes, expected {out_len}",
+                    out.len()
+                ),
+            ));
+        }
+        Ok(out)
+    }
+
+    #[test]
+    fn lzf_decoder_equals_the_byte_by_byte_reference() {
+        let mut s: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut next = |n: u64| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s % n
+        };
+        let mut oks = 0;
+        for case in 0..3000 {
+            // Data with repeats of every length and distance (short and long runs, a byte
+            // repeated, copies of far-back pieces), compressed by the test compressor.
+            let n = 1 + next(3000) as usize;
+            let mut data: Vec<u8> = Vec::with_capacity(n);
+            while data.len() < n {
+                match next(4) {
+                    0 => data.push(next(256) as u8),
+                    1 => {
+                        let b = next(256) as u8;
+                        data.extend(std::iter::repeat_n(b, next(40) as usize));
+                    }
+                    _ if data.len() > 4 => {
+                        let from = next(data.len() as u64) as usize;
+                        let len = (next(60) as usize).min(data.len() - from);
+                        data.extend_from_within(from..from + len);
+                    }
+                    _ => data.push(0),
+                }
+            }
+            data.truncate(n);
+            let mut c = lzf_compress(&data);
+            // Some streams damaged: a byte changed, cut short, or the size misdeclared.
+            let mut len = data.len();
+            match case % 4 {
+                1 if !c.is_empty() => {
+                    let at = next(c.len() as u64) as usize;
+                    c[at] = next(256) as u8;
+                }
+                2 => c.truncate(next(c.len() as u64 + 1) as usize),
+                3 => len = (len + next(64) as usize).saturating_sub(32),
+                _ => {}
+            }
+            let want = lzf_reference(&c, len);
+            oks += usize::from(want.is_ok());
+            assert_eq!(lzf_decompress(&c, len), want, "case {case}");
+        }
+        // Most streams decode, and some of every kind of damage is caught.
+        assert!(oks > 750 && oks < 2900, "{oks}");
     }
 
     #[test]
