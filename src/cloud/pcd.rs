@@ -40,6 +40,12 @@ impl Field {
         self.size * self.count
     }
 
+    /// Whether the values are 4-byte floats (`F 4`, the common layout of x, y, z), which
+    /// the readers decode with [`f32_le`] rather than [`Field::decode`].
+    fn is_f32(&self) -> bool {
+        self.ty == b'F' && self.size == 4
+    }
+
     /// Decodes one little-endian value (`b` is exactly `self.size` bytes).
     fn decode(&self, b: &[u8]) -> f64 {
         macro_rules! num {
@@ -50,7 +56,7 @@ impl Field {
             }};
         }
         match (self.ty, self.size) {
-            (b'F', 4) => f64::from(num!(f32, 4)),
+            (b'F', 4) => f32_le(b),
             (b'F', _) => num!(f64, 8),
             (b'I', 1) => f64::from(b[0] as i8),
             (b'I', 2) => f64::from(num!(i16, 2)),
@@ -62,6 +68,14 @@ impl Field {
             (_, _) => num!(u64, 8) as f64,
         }
     }
+}
+
+/// The little-endian `f32` at the start of `b` (at least 4 bytes): what [`Field::decode`]
+/// gives for an `F 4` field.
+fn f32_le(b: &[u8]) -> f64 {
+    let mut a = [0u8; 4];
+    a.copy_from_slice(&b[..4]);
+    f64::from(f32::from_le_bytes(a))
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -462,7 +476,7 @@ fn read_binary<R: Read>(
     let f32_at = h
         .xyz
         .iter()
-        .all(|&(fi, _, _)| h.fields[fi].ty == b'F' && h.fields[fi].size == 4)
+        .all(|&(fi, _, _)| h.fields[fi].is_f32())
         .then(|| h.xyz.map(|(_, off, _)| off));
     let block_rows = (BLOCK_BYTES / h.record.max(1)).max(1);
     let mut block = vec![0u8; block_rows * h.record];
@@ -481,11 +495,7 @@ fn read_binary<R: Read>(
         }
         let records = want.chunks_exact(h.record);
         if let Some(at) = f32_at {
-            let get = |row: &[u8], off: usize| {
-                let mut a = [0u8; 4];
-                a.copy_from_slice(&row[off..off + 4]);
-                f64::from(f32::from_le_bytes(a))
-            };
+            let get = |row: &[u8], off: usize| f32_le(&row[off..]);
             out.extend(
                 records.map(|row| Point3::new(get(row, at[0]), get(row, at[1]), get(row, at[2]))),
             );
@@ -581,23 +591,15 @@ fn read_compressed<R: Read>(
         .iter()
         .map(|&(fi, _, _)| (col(fi), &h.fields[fi]))
         .collect();
-    if cols
-        .iter()
-        .all(|(_, f)| f.ty == b'F' && f.size == 4 && f.count == 1)
-    {
+    if cols.iter().all(|(_, f)| f.is_f32() && f.count == 1) {
         // x, y and z all `F 4` with one value each (the common layout): three columns of
-        // floats read side by side, the same values as `Field::decode`.
+        // floats read side by side.
         let column = |k: usize| data[cols[k].0..cols[k].0 + 4 * n].chunks_exact(4);
-        let get = |b: &[u8]| {
-            let mut a = [0u8; 4];
-            a.copy_from_slice(b);
-            f64::from(f32::from_le_bytes(a))
-        };
         out.extend(
             column(0)
                 .zip(column(1))
                 .zip(column(2))
-                .map(|((x, y), z)| Point3::new(get(x), get(y), get(z))),
+                .map(|((x, y), z)| Point3::new(f32_le(x), f32_le(y), f32_le(z))),
         );
         return Ok(out);
     }

@@ -571,6 +571,8 @@ fn read_binary_body<R: BufRead>(
     // The rows wholly in the buffer are decoded together (up to the last row declared),
     // each the same way, so one look at the buffer serves them all.
     let row = fixed_row(v, xyz).filter(|(size, _)| *size > 0);
+    // x, y and z all `float`: decoded at fixed offsets, without the dispatch per field.
+    let f32_at = row.as_ref().and_then(|(_, fields)| f32_offsets(fields));
     let mut i = 0;
     while i < v.count {
         let start = src.pos;
@@ -581,18 +583,8 @@ fn read_binary_body<R: BufRead>(
                 if whole > 0 {
                     let bytes = whole * size;
                     let rows = b[..bytes].chunks_exact(*size);
-                    if let Some(at) = f32_offsets(fields) {
-                        // x, y and z all `float`: decoded at fixed offsets, the same
-                        // values as `Scalar::decode` gives.
-                        let get = |b: &[u8], off: usize| {
-                            let mut a = [0u8; 4];
-                            a.copy_from_slice(&b[off..off + 4]);
-                            f64::from(if big {
-                                f32::from_be_bytes(a)
-                            } else {
-                                f32::from_le_bytes(a)
-                            })
-                        };
+                    if let Some(at) = f32_at {
+                        let get = |b: &[u8], off: usize| Scalar::F32.decode(&b[off..], big);
                         out.extend(
                             rows.map(|b| Point3::new(get(b, at[0]), get(b, at[1]), get(b, at[2]))),
                         );
