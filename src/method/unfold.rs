@@ -482,11 +482,22 @@ impl NodeContext<'_> {
         links: &[usize],
     ) -> (Option<f64>, f64) {
         let (agent, node) = (self.agent, self.node);
+        // The parts tested, each cut to its span as the motion poses it.
+        let span = |l: usize| {
+            node.links
+                .iter()
+                .position(|&x| x == l)
+                .map_or([0.0, 1.0], |k| node.spans[k])
+        };
+        let parts: Vec<(usize, [f64; 2])> = links.iter().map(|&l| (l, span(l))).collect();
+        // How far any point of the tested parts moves per unit of the sweep: only they
+        // are tested, so the parts they carry (the hand beyond an armrest's forearm span)
+        // do not shorten the steps.
         let speed: f64 = branch
             .iter()
             .map(|&s| {
                 let sw = &node.sweeps[s];
-                (sw.theta2 - sw.theta1).abs() * agent.reach(sw.joint)
+                (sw.theta2 - sw.theta1).abs() * agent.reach_to(sw.joint, &parts)
             })
             .sum();
         // Only the branch's joints move; they are rewritten at every step.

@@ -598,6 +598,36 @@ impl Agent {
         }
         depth(self, j)
     }
+
+    /// Largest distance (metres) from the origin of joint `j` to any point of the body
+    /// parts `parts` that `j` moves, in any posture: `(link, span)` pairs, each link by its
+    /// joint's index cut to the fractions `span` of its axis (as [`Cylinder::span`]; the
+    /// radius included). Bounds how far a rotation of `j` by one radian moves those parts
+    /// (each is at most the chain of joint offsets from `j` down to its link, plus the
+    /// farther end of its span); parts `j` does not move count nothing. At most
+    /// [`Self::reach`]`(j)`.
+    pub fn reach_to(&self, j: usize, parts: &[(usize, [f64; 2])]) -> f64 {
+        parts
+            .iter()
+            .filter(|(l, _)| self.is_descendant(*l, j))
+            .map(|&(l, [s0, s1])| {
+                let own = self.joints[l].link.as_ref().map_or(0.0, |k| {
+                    let at = |s: f64| (k.from.coords + (k.to.coords - k.from.coords) * s).norm();
+                    at(s0).max(at(s1)) + k.radius
+                });
+                let mut chain = 0.0;
+                let mut k = l;
+                while k != j {
+                    chain += self.joints[k].origin.norm();
+                    match self.joints[k].parent {
+                        Some(p) => k = p,
+                        None => break,
+                    }
+                }
+                chain + own
+            })
+            .fold(0.0, f64::max)
+    }
 }
 
 #[cfg(test)]
@@ -806,6 +836,75 @@ link = { name = "shank", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.25], radius 
         // From the hip: 0.25 to the knee + 0.25 shank + 0.03 radius.
         assert!((a.reach(0) - 0.53).abs() < 1e-9);
         assert!((a.reach(1) - 0.28).abs() < 1e-9);
+        // Every part whole: the whole subtree's reach.
+        let whole = [(0, [0.0, 1.0]), (1, [0.0, 1.0])];
+        assert!((a.reach_to(0, &whole) - a.reach(0)).abs() < 1e-9);
+        assert!((a.reach_to(1, &whole) - a.reach(1)).abs() < 1e-9);
+        // The near half of the shank: the thigh's joint offset, half the shank, its
+        // radius; the thigh alone is not moved by the knee.
+        assert!((a.reach_to(0, &[(1, [0.0, 0.5])]) - (0.25 + 0.125 + 0.03)).abs() < 1e-9);
+        assert!(a.reach_to(1, &[(0, [0.0, 1.0])]) == 0.0);
+    }
+
+    #[test]
+    fn a_turn_moves_the_parts_no_further_than_their_reach() {
+        // In postures drawn across the limits, turning one joint by a small angle moves
+        // the span ends of the parts it carries no further than `reach_to` times the
+        // angle: the armrest's forearm span from the shoulder, a leg from the hip, the
+        // head from the lumbar joint.
+        let a = Agent::from_toml(builtin("human"), Path::new("human.toml"), 1.75).unwrap();
+        let ix = |n: &str| a.joint_index(n).unwrap();
+        let cases = [
+            ("shoulder_l", vec![("forearm_l", [0.0, 0.6])]),
+            (
+                "hip_r",
+                vec![
+                    ("thigh_r", [0.0, 1.0]),
+                    ("shank_r", [0.0, 1.0]),
+                    ("foot_r", [0.0, 1.0]),
+                ],
+            ),
+            ("lumbar", vec![("head", [0.3, 1.0])]),
+        ];
+        let place = Placement {
+            position: Point3::new(0.3, -0.2, 0.5),
+            yaw: 0.7,
+        };
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let (mut f0, mut f1) = (Vec::new(), Vec::new());
+        for (joint, links) in &cases {
+            let j = ix(joint);
+            let parts: Vec<(usize, [f64; 2])> = links
+                .iter()
+                .map(|(l, s)| (a.link_index(l).unwrap(), *s))
+                .collect();
+            let reach = a.reach_to(j, &parts);
+            assert!(
+                reach > 0.0 && reach <= a.reach(j) + 1e-12,
+                "{joint}: {reach}"
+            );
+            for _ in 0..200 {
+                let mut p = a.rest_posture();
+                for (k, jt) in a.joints.iter().enumerate() {
+                    p.angles[k] = jt.limit.0 + rng.random::<f64>() * (jt.limit.1 - jt.limit.0);
+                }
+                let turn = 1e-3;
+                let mut q = p.clone();
+                q.angles[j] += turn;
+                a.forward_kinematics(&place, &p, &mut f0);
+                a.forward_kinematics(&place, &q, &mut f1);
+                let tested = |l: usize| parts.iter().any(|&(t, _)| t == l);
+                let (c0, c1) = (a.cylinders(&f0, tested), a.cylinders(&f1, tested));
+                for (x, y) in c0.iter().zip(&c1) {
+                    let span = parts.iter().find(|&&(t, _)| t == x.joint).unwrap().1;
+                    let (x, y) = (x.span(span), y.span(span));
+                    for moved in [(y.a - x.a).norm(), (y.b - x.b).norm()] {
+                        assert!(moved <= reach * turn * (1.0 + 1e-6), "{joint}: {moved}");
+                    }
+                }
+            }
+        }
     }
 
     /// The error loading `text` as `x.toml`.
