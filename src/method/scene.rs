@@ -647,8 +647,28 @@ impl Scene {
     /// clearance bound is not positive, and the contact is refined by bisection.
     pub fn first_contact(
         &self,
+        motion: impl FnMut(f64, &mut Vec<Cylinder>),
+        speed: f64,
+        resolution: f64,
+    ) -> Option<f64> {
+        self.first_contact_turning(motion, speed, None, resolution)
+    }
+
+    /// [`Self::first_contact`] for a motion that, with `turn` = `(pivot, rate)`, turns
+    /// every part about one axis through `pivot` (world frame, metres; fixed during the
+    /// motion) by at most `rate` radians per unit of `t`, so that a point moves at most
+    /// `rate` times its distance from `pivot` (and `speed` bounds the fastest). Where a
+    /// part's clearance allows no step, each point along it then steps by its own
+    /// clearance, or `resolution`, at its own speed ([`Self::turn_bound`]): a part that
+    /// lies near a surface at its pivot end (a trunk lowered onto a mattress about the
+    /// hip, a shank swinging down past a seat's front edge) is not held to steps of
+    /// `resolution` at the speed of its far end. Every point still moves at most the larger
+    /// of its clearance and `resolution` per step.
+    pub fn first_contact_turning(
+        &self,
         mut motion: impl FnMut(f64, &mut Vec<Cylinder>),
         speed: f64,
+        turn: Option<(Point3<f64>, f64)>,
         resolution: f64,
     ) -> Option<f64> {
         let mut parts = Vec::new();
@@ -703,16 +723,77 @@ impl Scene {
                 if in_field[i] {
                     last[i] = Some((g, t));
                 }
-                gap = gap.min(g);
-                if g <= 0.0 && self.intersects_near(c, centres, Some(&mut near[i])) {
-                    // The gap is not used once a part touches: the rest need no test.
-                    hit = true;
-                    break;
+                let mut part_gap = g;
+                if g <= 0.0 {
+                    if self.intersects_near(c, centres, Some(&mut near[i])) {
+                        // The gap is not used once a part touches: the rest need no test.
+                        hit = true;
+                        break;
+                    }
+                    // Free: how long it may turn, as the distance the fastest point
+                    // covers in that time.
+                    // Worth it for a part whose near end turns at under half the
+                    // fastest speed ([`TURN_LEVER`]).
+                    if let Some((pivot, rate)) = &turn {
+                        let near_end = (c.a - pivot).norm().min((c.b - pivot).norm()) + c.radius;
+                        if rate * near_end < TURN_LEVER * speed {
+                            let least = resolution / speed;
+                            part_gap =
+                                g.max(self.turn_bound(c, pivot, *rate, resolution, least) * speed);
+                        }
+                    }
                 }
+                gap = gap.min(part_gap);
             }
             (hit, gap)
         };
         advance(|t| touching(t, &mut parts), speed, resolution)
+    }
+}
+
+impl Scene {
+    /// A lower bound on how long (in units of a motion's parameter) the body part `c` may
+    /// turn about an axis through `pivot` (world frame) at `rate` radians per unit before
+    /// some point of it has moved further than the larger of its own clearance and
+    /// `resolution` (metres): over samples at most a voxel apart along the axis, each
+    /// sample's clearance (the field's bound at it, and its height above the floor, less
+    /// half the spacing and the radius), or `resolution` where that is larger, over the
+    /// speed of the points near it (`rate` times its distance from `pivot` plus half the
+    /// spacing and the radius). Every point of the part is within half a spacing and the
+    /// radius of a sample. The samples are read from the end farther from `pivot`, and
+    /// the reading stops once the bound is at most `enough` (the step the search takes
+    /// anyway), which is then returned.
+    fn turn_bound(
+        &self,
+        c: &Cylinder,
+        pivot: &Point3<f64>,
+        rate: f64,
+        resolution: f64,
+        enough: f64,
+    ) -> f64 {
+        let axis = c.b - c.a;
+        let len = axis.norm();
+        let n = to_usize((len / self.voxel).ceil().max(1.0));
+        let nf = index_f64(n);
+        let spacing = len / nf;
+        let from_b = (c.b - pivot).norm() > (c.a - pivot).norm();
+        let mut least = f64::INFINITY;
+        for k in 0..=n {
+            let i = if from_b { n - k } else { k };
+            let q = c.a + axis * (index_f64(i) / nf);
+            let mut clear = self.point_clearance(&q);
+            if self.floor {
+                clear = clear.min(q.z);
+            }
+            let clear = clear - spacing / 2.0 - c.radius;
+            let clear = clear - BOUND_SLACK * (1.0 + clear.abs() + len);
+            let lever = (q - pivot).norm() + spacing / 2.0 + c.radius;
+            least = least.min(clear.max(resolution) / (rate * lever));
+            if least <= enough {
+                return enough;
+            }
+        }
+        least
     }
 }
 
@@ -818,6 +899,13 @@ fn advance(
 /// to be decided without GJK: a thousand times the f32 rounding of room-sized coordinates,
 /// so only voxels that GJK itself would decide the same way are skipped.
 const DECIDE_MARGIN: f64 = 1e-3;
+
+/// Share of a turning motion's fastest speed under which a part's nearer end must move for
+/// the contact search to bound its steps point by point ([`Scene::turn_bound`]): a trunk
+/// or shank turning about its own end (near 0) gains steps several times longer; a
+/// forearm turning about the shoulder (its elbow end at two thirds of the fastest speed)
+/// gains too little for the samples read.
+const TURN_LEVER: f64 = 0.5;
 
 /// Relative slack (of the distances involved) taken off bounds derived from the field's
 /// `f32` distances: eight times their rounding (2^-23 per operation), so a bound stays
@@ -2631,9 +2719,8 @@ mod tests {
         (p - (a + d * t)).norm()
     }
 
-    #[test]
-    fn centre_bound_is_below_the_nearest_voxel_centre() {
-        let s = furnished(false);
+    /// The centres (world frame) of every occupied voxel of `s`.
+    fn voxel_centres(s: &Scene) -> Vec<Point3<f64>> {
         let field = s.field.as_ref().unwrap();
         let mut centres = Vec::new();
         let hi = [0, 1, 2].map(|a| field.min[a] + field.dims[a] as i64);
@@ -2642,6 +2729,57 @@ mod tests {
             centres.push(Point3::from(l * s.voxel + s.origin));
             false
         });
+        centres
+    }
+
+    #[test]
+    fn a_turn_within_its_bound_moves_no_point_past_its_clearance() {
+        // Over random parts, pivots and rates, a turn of `turn_bound` moves every point of
+        // the part (sampled through its volume) by at most the larger of its true
+        // distance to every occupied voxel and the resolution.
+        let s = furnished(false);
+        let centres = voxel_centres(&s);
+        let half = s.voxel / 2.0;
+        let clearance = |p: Point3<f64>| {
+            centres
+                .iter()
+                .map(|c| (p - c).map(|d| (d.abs() - half).max(0.0)).norm())
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut state = 17u64;
+        let mut next = || uniform(&mut state);
+        let resolution = 0.005;
+        let mut stepped = 0;
+        for _ in 0..400 {
+            let a = Point3::new(next() * 1.6 - 0.5, next() * 1.0 - 0.2, next() * 0.9);
+            let c = random_cylinder(&mut next, a);
+            let pivot = c.a + Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.3;
+            let rate = 0.2 + next() * 2.0;
+            let time = s.turn_bound(&c, &pivot, rate, resolution, 0.0);
+            assert!(time > 0.0, "{c:?}");
+            let axis = c.b - c.a;
+            // Two directions across the axis.
+            let u = axis.cross(&Vector3::new(0.3, 0.5, 0.8)).normalize();
+            let w = axis.normalize().cross(&u);
+            for _ in 0..40 {
+                let (angle, r) = (next() * std::f64::consts::TAU, c.radius * next().sqrt());
+                let p = c.a + axis * next() + (u * angle.cos() + w * angle.sin()) * r;
+                let moved = rate * time * (p - pivot).norm();
+                let room = clearance(p).max(resolution);
+                assert!(moved <= room + 1e-9, "{c:?}: {moved} > {room}");
+                if moved > resolution {
+                    stepped += 1;
+                }
+            }
+        }
+        // Most points may move further than the resolution.
+        assert!(stepped > 4000, "{stepped}");
+    }
+
+    #[test]
+    fn centre_bound_is_below_the_nearest_voxel_centre() {
+        let s = furnished(false);
+        let centres = voxel_centres(&s);
         let mut state = 5u64;
         let mut next = || uniform(&mut state);
         let (mut bounded, mut decided) = (0, 0);

@@ -15,6 +15,7 @@ use crate::method::scene::Scene;
 use crate::model::agent::{Agent, Cylinder, FkCache, Placement, Posture};
 use crate::model::hierarchy::{Fallback, Hierarchy, Node, Spread};
 use crate::num::to_usize;
+use nalgebra::Point3;
 
 /// Least length of the horizontal part of a unit contact normal for the `rear` rule to
 /// read a direction from it: sin 30 degrees; a normal within 30 degrees of vertical (the
@@ -503,6 +504,23 @@ impl NodeContext<'_> {
         // Only the branch's joints move; they are rewritten at every step.
         let mut p = posture.clone();
         let (mut frames, mut cache) = (Vec::new(), FkCache::default());
+        // One joint turning: every tested point moves at most the turn's rate times its
+        // distance from the joint's origin, which the turn does not move. Posed here as
+        // the motion poses it at its start, whose first call then reuses these frames.
+        self.at(branch, 0.0, &mut p);
+        agent.forward_kinematics_cached(self.place, &p, &mut cache, &mut frames);
+        let turn = match branch {
+            [s] => {
+                let sw = &node.sweeps[*s];
+                frames.get(sw.joint).map(|f| {
+                    (
+                        Point3::from(f.translation.vector),
+                        (sw.theta2 - sw.theta1).abs(),
+                    )
+                })
+            }
+            _ => None,
+        };
         let mut motion = |t: f64, out: &mut Vec<Cylinder>| {
             self.at(branch, t, &mut p);
             agent.forward_kinematics_cached(self.place, &p, &mut cache, &mut frames);
@@ -513,9 +531,12 @@ impl NodeContext<'_> {
                 }
             }
         };
-        let mut hit =
-            self.scene
-                .first_contact(&mut motion, speed.max(1e-9), self.contact.resolution);
+        let mut hit = self.scene.first_contact_turning(
+            &mut motion,
+            speed.max(1e-9),
+            turn,
+            self.contact.resolution,
+        );
         let mut blocked = None;
         if self.free_start(hit) {
             blocked = hit.take();
