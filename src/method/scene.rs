@@ -731,9 +731,8 @@ impl Scene {
                         break;
                     }
                     // Free: how long it may turn, as the distance the fastest point
-                    // covers in that time.
-                    // Worth it for a part whose near end turns at under half the
-                    // fastest speed ([`TURN_LEVER`]).
+                    // covers in that time; worth it for a part whose near end turns at
+                    // under half the fastest speed ([`TURN_LEVER`]).
                     if let Some((pivot, rate)) = &turn {
                         let near_end = (c.a - pivot).norm().min((c.b - pivot).norm()) + c.radius;
                         if rate * near_end < TURN_LEVER * speed {
