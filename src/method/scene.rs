@@ -748,9 +748,7 @@ impl Scene {
         };
         advance(|t| touching(t, &mut parts), speed, resolution)
     }
-}
 
-impl Scene {
     /// A lower bound on how long (in units of a motion's parameter) the body part `c` may
     /// turn about an axis through `pivot` (world frame) at `rate` radians per unit before
     /// some point of it has moved further than the larger of its own clearance and
