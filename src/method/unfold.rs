@@ -13,9 +13,9 @@
 use crate::method::fit::{ContactConfig, Fit};
 use crate::method::scene::Scene;
 use crate::model::agent::{Agent, Cylinder, FkCache, Placement, Posture};
-use crate::model::hierarchy::{Fallback, Hierarchy, Node, Spread};
+use crate::model::hierarchy::{Fallback, Hierarchy, Node, Slide, Spread};
 use crate::num::to_usize;
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 
 /// Least length of the horizontal part of a unit contact normal for the `rear` rule to
 /// read a direction from it: sin 30 degrees; a normal within 30 degrees of vertical (the
@@ -137,6 +137,8 @@ pub fn unfold(
     contact: &ContactConfig,
 ) -> Unfolded {
     let mut posture = fit.posture.clone();
+    // Where the body stands: the fit's place, until a node slides it back (`slide`).
+    let mut placement = fit.placement;
     let mut nodes: Vec<NodeOutcome> = Vec::with_capacity(h.nodes.len());
     let mut score = 0.0;
     for node in &h.nodes {
@@ -152,15 +154,26 @@ pub fn unfold(
             });
             continue;
         }
-        let (found, local) = NodeContext {
-            agent,
-            h,
-            scene,
-            place: &fit.placement,
-            node,
-            contact,
+        let start = posture.clone();
+        let unfold_at = |place: &Placement, posture: &mut Posture| {
+            NodeContext {
+                agent,
+                h,
+                scene,
+                place,
+                node,
+                contact,
+            }
+            .unfold(posture)
+        };
+        let (mut found, mut local) = unfold_at(&placement, &mut posture);
+        if let (false, Some(slide)) = (found, &node.slide) {
+            if let Some((moved, l, slid)) =
+                slide_back(agent, scene, &placement, &start, slide, unfold_at)
+            {
+                (found, local, posture, placement) = (true, l, slid, moved);
+            }
         }
-        .unfold(&mut posture);
         if found {
             score = t_conorm(score, local);
         }
@@ -171,13 +184,57 @@ pub fn unfold(
         });
     }
     Unfolded {
-        placement: fit.placement,
+        placement,
         posture,
         nodes,
         score,
         stability: fit.stability,
         turned: fit.turned,
     }
+}
+
+/// A node's `slide` (see [`Slide`]): the body in posture `start` moved back from `place`
+/// along its heading by each of the slide's steps in turn, as long as it is clear of the
+/// scene lifted by the slide's `lift`, and unfolded there by `unfold` (which returns
+/// whether the node was found and its local score, and leaves the posture it ends in).
+/// The first moved place where the node is found, with its local score and posture;
+/// `None` when the body meets something before or the node is found at none.
+fn slide_back(
+    agent: &Agent,
+    scene: &Scene,
+    place: &Placement,
+    start: &Posture,
+    slide: &Slide,
+    mut unfold: impl FnMut(&Placement, &mut Posture) -> (bool, f64),
+) -> Option<(Placement, f64, Posture)> {
+    let back = -Vector3::new(place.yaw.cos(), place.yaw.sin(), 0.0);
+    let up = Vector3::new(0.0, 0.0, slide.lift);
+    let (mut frames, mut parts) = (Vec::new(), Vec::new());
+    for &d in &slide.steps {
+        let moved = Placement {
+            position: place.position + back * d,
+            yaw: place.yaw,
+        };
+        agent.forward_kinematics(&moved, start, &mut frames);
+        parts.clear();
+        agent.cylinders_into(&frames, |_| true, &mut parts);
+        let meets = parts.iter().any(|c| {
+            scene.touches(&Cylinder {
+                a: c.a + up,
+                b: c.b + up,
+                ..*c
+            })
+        });
+        if meets {
+            return None;
+        }
+        let mut posture = start.clone();
+        let (found, local) = unfold(&moved, &mut posture);
+        if found {
+            return Some((moved, local, posture));
+        }
+    }
+    None
 }
 
 /// What the rules of one node's unfolding read: the body, its hierarchy (for the scores),
@@ -926,24 +983,83 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         assert!(!c.free_start(None));
     }
 
+    /// A back (the plane x = 0, 0.45-1.0 m high, 0.6 m wide) with a surface at 0.45 m in
+    /// front of it running `length` cm along +x and, with `front`, a face from its front
+    /// edge down to the floor; points 1 cm apart.
+    fn seat_and_back(length: usize, front: bool) -> Vec<Point3<f64>> {
+        let x = length as f64 * 0.01;
+        let mut pts = Vec::new();
+        for j in 0..=60 {
+            let y = -0.3 + j as f64 * 0.01;
+            for i in 0..=length {
+                pts.push(Point3::new(i as f64 * 0.01, y, 0.45));
+            }
+            for k in 0..=100 {
+                let z = k as f64 * 0.01;
+                if k >= 45 {
+                    pts.push(Point3::new(0.0, y, z));
+                } else if front {
+                    pts.push(Point3::new(x, y, z));
+                }
+            }
+        }
+        pts
+    }
+
+    #[test]
+    fn a_body_slides_back_onto_a_back_it_does_not_reach_until_its_shanks_meet_the_seat() {
+        use crate::model::set::{BUILTIN_AGENT, BUILTIN_SITTING};
+        let agent = Agent::from_toml(BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap();
+        let h = Hierarchy::from_toml(BUILTIN_SITTING, Path::new("sitting.toml"), &agent).unwrap();
+        let backrest = h.ids().iter().position(|i| *i == "backrest").unwrap();
+        let mut still = h.clone();
+        still.nodes[backrest].slide = None;
+        // A chair: seat and back, its seat's front face dropping to the floor.
+        let chair = |cm: usize| {
+            Scene::new(
+                &PointCloud::new(seat_and_back(cm, true)),
+                &DetectConfig::default().scene,
+            )
+        };
+        // Seated 0.45 m in front of the back, facing +x: the trunk leaning 35 deg does
+        // not reach it.
+        let fit = Fit {
+            placement: seated(0.45),
+            posture: h.initial.clone(),
+            stability: 1.0,
+            turned: false,
+        };
+        let x = |u: &Unfolded| u.placement.position.x;
+        let shallow = chair(55);
+        let without = unfold(&agent, &still, &shallow, &fit, &CONTACT);
+        assert!(without.nodes[0].found && !without.nodes[backrest].found);
+        assert_eq!(x(&without), 0.45);
+        let slid = unfold(&agent, &h, &shallow, &fit, &CONTACT);
+        assert!(slid.nodes[0].found && slid.nodes[backrest].found);
+        let moved = 0.45 - x(&slid);
+        assert!(
+            [0.05, 0.10, 0.15].iter().any(|d| (moved - d).abs() < 1e-9),
+            "moved {moved}"
+        );
+        assert_eq!(slid.placement.position.y, 0.0);
+        // A seat 0.25 m deeper: its front face stands 2.6 cm behind the hanging shanks
+        // (the knee 0.43 m in front of the pelvis, the shank 5.3 cm thick), so the first
+        // 5 cm back already meets it, and the body stays where it was.
+        let deep = chair(80);
+        let stopped = unfold(&agent, &h, &deep, &fit, &CONTACT);
+        assert!(stopped.nodes[0].found && !stopped.nodes[backrest].found);
+        assert_eq!(x(&stopped), 0.45);
+    }
+
     #[test]
     fn rear_accepts_a_chair_back_and_refuses_a_headboard() {
         use crate::model::hierarchy::Rear;
         let (a, h) = models();
-        // A back (the plane x = 0, 0.45-1.0 m high, 0.6 m wide) with a surface at 0.45 m
-        // in front of it running `length` cm along +x, as points 1 cm apart.
         let scene = |length: usize| {
-            let mut pts = Vec::new();
-            for j in 0..=60 {
-                let y = -0.3 + j as f64 * 0.01;
-                for i in 0..=length {
-                    pts.push(Point3::new(i as f64 * 0.01, y, 0.45));
-                }
-                for k in 45..=100 {
-                    pts.push(Point3::new(0.0, y, k as f64 * 0.01));
-                }
-            }
-            Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene)
+            Scene::new(
+                &PointCloud::new(seat_and_back(length, false)),
+                &DetectConfig::default().scene,
+            )
         };
         let (chair, bed) = (scene(45), scene(200));
         // The pelvis 0.15 m in front of the back; a trunk leaning 1 cm into the back.

@@ -287,6 +287,27 @@ pub struct Node {
     /// them, away from the body's midplane, within `support_gap` below (an armrest is a
     /// rest for one arm, a table top beside the body goes on). `None`: no such test.
     pub narrow: Option<f64>,
+    /// Where the node finds nothing at the fit's place, the body slides back on its seat
+    /// and the node is tried again (`None`: no slide).
+    pub slide: Option<Slide>,
+}
+
+/// A node's `slide`: where the node finds nothing at the place the fit found, the body, in
+/// the posture the node starts from, is moved back along its heading by each of `steps`
+/// in turn (metres, nearest first) while it stays clear of the scene when lifted by
+/// `lift` metres, and the node is unfolded there; the first place where it is found is
+/// kept, for the nodes below it and the reported pose. A person settles back into a seat
+/// deeper than the place leaves behind the pelvis (the place stands at least the template's
+/// radius in front of a back). Lifted, the parts resting on the seat and the feet on the
+/// floor are clear of them, while a back, an arm or the seat's front edge against the
+/// hanging shanks ends the slide (an extension of section 4.4: the root joint unfolds
+/// too).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Slide {
+    /// Metres back along the heading, increasing.
+    pub steps: Vec<f64>,
+    /// Metres the body is lifted for the test that it is clear of the scene.
+    pub lift: f64,
 }
 
 /// A node's `rear` rule: a contact counts only if, from the root joint along the
@@ -498,6 +519,15 @@ struct NodeFile {
     rear: Option<RearFile>,
     #[serde(default)]
     narrow: Option<f64>,
+    #[serde(default)]
+    slide: Option<SlideFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SlideFile {
+    steps: Vec<f64>,
+    lift: f64,
 }
 
 #[derive(Deserialize)]
@@ -890,7 +920,8 @@ fn check_limits(file: &File, src: Source) -> Result<(), ModelError> {
     Ok(())
 }
 
-/// Most entries of `[fit] shift_back`: each is a fit of the place at every heading.
+/// Most entries of `[fit] shift_back` (each is a fit of the place at every heading) and of
+/// a node's `slide.steps` (each unfolds the node again).
 const MAX_SHIFTS: usize = 16;
 
 /// Checks the numbers of the hypothesis, fit and score sections.
@@ -1148,6 +1179,33 @@ fn resolve_node(
         .narrow
         .map(|w| fraction_of_h(src, &key.key("narrow"), w))
         .transpose()?;
+    let slide = match &n.slide {
+        None => None,
+        Some(sl) => {
+            let steps = key.key("slide").key("steps");
+            if sl.steps.is_empty() || sl.steps.len() > MAX_SHIFTS {
+                return Err(src.invalid(
+                    &steps,
+                    format!(
+                        "{} entries, at least 1 and at most {MAX_SHIFTS} (each unfolds the node again)",
+                        sl.steps.len()
+                    ),
+                ));
+            }
+            // A body slid further than a metre sits on another seat.
+            if let Some(v) = sl.steps.iter().find(|v| !(**v > 0.0 && **v <= 1.0)) {
+                return Err(src.invalid(&steps, format!("{v} is outside 0-1 (metres, over 0)")));
+            }
+            if sl.steps.windows(2).any(|w| w[1] <= w[0]) {
+                return Err(src.invalid(&steps, "must increase (nearest first)"));
+            }
+            // Lifted a metre, the body would pass over a chair's back.
+            Some(Slide {
+                steps: sl.steps.clone(),
+                lift: gap_under_a_metre(src, &key.key("slide").key("lift"), sl.lift)?,
+            })
+        }
+    };
     if let Some(v) = n.support_share {
         if !(v > 0.0 && v <= 1.0) {
             return Err(src.invalid(
@@ -1325,6 +1383,7 @@ fn resolve_node(
         beside,
         rear,
         narrow,
+        slide,
     })
 }
 
@@ -1341,7 +1400,7 @@ fn fraction_of_h(src: Source, key: &Key, v: f64) -> Result<f64, ModelError> {
     }
 }
 
-/// A node rule's gap (`beside`, `rear`), metres: 0 or more and under 1, else an error at `key`.
+/// A node rule's gap (`beside`, `rear`, `slide.lift`), metres: 0 or more and under 1, else an error at `key`.
 fn gap_under_a_metre(src: Source, key: &Key, gap: f64) -> Result<f64, ModelError> {
     if (0.0..1.0).contains(&gap) {
         Ok(gap)
@@ -1768,6 +1827,28 @@ mod tests {
         );
         let (e, line) = edited("hole_depth = 0.25", "hole_depth = 0.0");
         names(&e, line, "hypothesis.hole_depth", "positive");
+    }
+
+    #[test]
+    fn a_bad_slide_is_named() {
+        let h = load(BUILTIN_SITTING).unwrap();
+        let slides: Vec<(&str, Option<&Slide>)> = h
+            .nodes
+            .iter()
+            .map(|n| (n.id.as_str(), n.slide.as_ref()))
+            .collect();
+        assert!(slides
+            .iter()
+            .all(|(id, s)| s.is_some() == (*id == "backrest")));
+        let rule = "slide = { steps = [0.05, 0.10, 0.15], lift = 0.02 }";
+        let (e, line) = edited(rule, "slide = { steps = [0.10, 0.05], lift = 0.02 }");
+        names(&e, line, "node.backrest.slide.steps", "increase");
+        let (e, line) = edited(rule, "slide = { steps = [0.0, 0.05], lift = 0.02 }");
+        names(&e, line, "node.backrest.slide.steps", "outside 0-1");
+        let (e, line) = edited(rule, "slide = { steps = [], lift = 0.02 }");
+        names(&e, line, "node.backrest.slide.steps", "at least 1");
+        let (e, line) = edited(rule, "slide = { steps = [0.05], lift = 1.0 }");
+        names(&e, line, "node.backrest.slide.lift", "under 1 metre");
     }
 
     #[test]
