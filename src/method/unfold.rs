@@ -36,7 +36,7 @@ pub struct NodeOutcome {
 /// The agent after unfolding: the goal configuration H_g and what it found.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Unfolded {
-    /// Where the agent is.
+    /// Where the agent is: where the fit placed it, or where a node's `slide` moved it.
     pub placement: Placement,
     /// The goal posture H_g.
     pub posture: Posture,
@@ -128,7 +128,10 @@ pub fn local_score(sq_error: Option<f64>, sigma_theta: f64, epsilon: f64) -> f64
     }
 }
 
-/// Unfolds the hierarchy from a fit (sections 4.3 and 4.4).
+/// Unfolds the hierarchy from a fit (sections 4.3 and 4.4): each node visited in turn
+/// sweeps its joints from the posture the nodes before it left; where a node with a
+/// `slide` finds nothing, the body slides back (`slide_back`) and stays where the node
+/// is found, for the nodes after it.
 pub fn unfold(
     agent: &Agent,
     h: &Hierarchy,
