@@ -157,7 +157,8 @@ pub fn unfold(
             });
             continue;
         }
-        let start = posture.clone();
+        // The posture the node starts from, for a slide to start from too.
+        let start = node.slide.as_ref().map(|_| posture.clone());
         let unfold_at = |place: &Placement, posture: &mut Posture| {
             NodeContext {
                 agent,
@@ -170,9 +171,9 @@ pub fn unfold(
             .unfold(posture)
         };
         let (mut found, mut local) = unfold_at(&placement, &mut posture);
-        if let (false, Some(slide)) = (found, &node.slide) {
+        if let (false, Some(slide), Some(start)) = (found, &node.slide, &start) {
             if let Some((moved, l, slid)) =
-                slide_back(agent, scene, &placement, &start, slide, unfold_at)
+                slide_back(agent, scene, &placement, start, slide, unfold_at)
             {
                 (found, local, posture, placement) = (true, l, slid, moved);
             }
