@@ -506,6 +506,24 @@ impl Scene {
         ))
     }
 
+    /// The point of the axis of body part `c` (world) nearest to an occupied voxel, by the
+    /// distance field at voxel steps along it (the point [`Self::contact_normal`] reads the
+    /// field's gradient at); the part's first end where the field does not reach it.
+    pub fn nearest_axis_point(&self, c: &Cylinder) -> Point3<f64> {
+        let axis = c.b - c.a;
+        let n = to_usize((axis.norm() / self.voxel).ceil()).max(1);
+        let (mut best, mut at) = (f64::INFINITY, c.a);
+        for i in 0..=n {
+            let p = c.a + axis * (i as f64 / n as f64);
+            let d = self.point_clearance(&p);
+            if d < best {
+                best = d;
+                at = p;
+            }
+        }
+        at
+    }
+
     /// The direction (unit, world) in which the scene falls away from the body part `c` where
     /// it comes closest to it: the gradient of the distance field at the axis point nearest
     /// to an occupied voxel. For a forearm lying on an armrest it points up; for one
@@ -565,6 +583,55 @@ impl Scene {
         } else {
             f64::INFINITY
         }
+    }
+
+    /// Whether the surface at the height of a seat goes on beyond what stands on it: a
+    /// level walk from `from` along the unit direction `dir`, in steps of one voxel up to
+    /// `limit` metres, looks down from each probe to the first surface within reach of
+    /// `level - gap` ([`Self::drop_below`]). While that surface lies above `level` the walk
+    /// is over what stands up (a back, an arm, a pillow, or `from` itself inside it). Past
+    /// it, true once a surface has lain within `gap` below `level` under consecutive
+    /// probes over `length` metres (the mattress beyond a pillow, the top of a night stand
+    /// beyond its lamp); false at the first probe with nothing there (the floor far below
+    /// a chair's back or a sofa's arm, the space behind a wall the scan did not see). A
+    /// stretch shorter than `length` (the seat seen through the gaps of a slatted back)
+    /// ends where something stands up again, and the walk goes on. False when the walk
+    /// meets nothing above `level`, or reaches `limit`.
+    pub fn goes_on_beyond(
+        &self,
+        from: &Point3<f64>,
+        dir: &Vector3<f64>,
+        limit: f64,
+        (level, gap): (f64, f64),
+        length: f64,
+    ) -> bool {
+        let bottom = level - gap;
+        let mut over = false;
+        // Where the current stretch at the seat's level began, metres along the walk.
+        let mut stretch: Option<f64> = None;
+        let mut s = 0.0;
+        while s <= limit {
+            let q = from + dir * s;
+            let depth = q.z - bottom;
+            if depth <= 0.0 {
+                return false;
+            }
+            let d = self.drop_below(&q, depth);
+            if q.z - d > level {
+                over = true;
+                stretch = None;
+            } else if over {
+                if !d.is_finite() {
+                    return false;
+                }
+                let start = *stretch.get_or_insert(s);
+                if s - start >= length {
+                    return true;
+                }
+            }
+            s += self.voxel;
+        }
+        false
     }
 
     /// Whether a surface under a level walk ends: from `from` along the unit direction

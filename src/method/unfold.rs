@@ -350,6 +350,49 @@ impl NodeContext<'_> {
         })
     }
 
+    /// `beyond`: whether every part of `parts` that touches the scene touches something at
+    /// the edge of the surface the body sits on: from the part's axis point nearest to the
+    /// scene, raised by its radius (level with its top), walking away from the body (into
+    /// what was touched, along the horizontal part of the contact's normal; outwards from
+    /// the body's midplane where that normal is within 30 degrees of vertical), the
+    /// surface at the root joint's level does not go on beyond what was touched
+    /// ([`Scene::goes_on_beyond`]). True when the node has no `beyond` rule.
+    pub fn beyond(&self, parts: &[Cylinder]) -> bool {
+        let Some(rule) = self.node.beyond else {
+            return true;
+        };
+        let reach = rule.reach * self.agent.height;
+        let level = self.place.position.z;
+        parts.iter().filter(|p| self.scene.touches(p)).all(|p| {
+            let Some(n) = self.scene.contact_normal(p) else {
+                return true;
+            };
+            let near = self.scene.nearest_axis_point(p);
+            let flat = nalgebra::Vector3::new(n.x, n.y, 0.0);
+            let dir = if flat.norm() >= REAR_MIN_HORIZONTAL {
+                -flat.normalize()
+            } else {
+                self.outwards(&near)
+            };
+            let from = nalgebra::Point3::new(near.x, near.y, near.z + p.radius);
+            !self
+                .scene
+                .goes_on_beyond(&from, &dir, reach, (level, rule.gap), rule.length)
+        })
+    }
+
+    /// The level unit direction square to the heading, away from the body's midplane (the
+    /// vertical plane through the root joint along the heading), on the side of `at`.
+    fn outwards(&self, at: &nalgebra::Point3<f64>) -> nalgebra::Vector3<f64> {
+        let (s, c) = self.place.yaw.sin_cos();
+        let left = nalgebra::Vector3::new(-s, c, 0.0);
+        if (at - self.place.position).dot(&left) >= 0.0 {
+            left
+        } else {
+            -left
+        }
+    }
+
     /// `narrow`: whether every part of `parts` that touches the scene rests on something
     /// that ends beside the body: from the part's middle, at its underside, outwards (away
     /// from the body's midplane, level), the scene stops lying within the node's
@@ -365,15 +408,9 @@ impl NodeContext<'_> {
         // Half a voxel above the underside: what the part rests on (touching it, or up to
         // a voxel into it) is below the probe.
         let lift = self.scene.voxel_size() / 2.0;
-        let (s, c) = self.place.yaw.sin_cos();
-        let left = nalgebra::Vector3::new(-s, c, 0.0);
         parts.iter().filter(|p| self.scene.touches(p)).all(|p| {
             let mid = nalgebra::center(&p.a, &p.b);
-            let out = if (mid - self.place.position).dot(&left) >= 0.0 {
-                left
-            } else {
-                -left
-            };
+            let out = self.outwards(&mid);
             let from = nalgebra::Point3::new(mid.x, mid.y, p.a.z.min(p.b.z) - p.radius + lift);
             self.scene.surface_ends(&from, &out, width, gap)
         })
@@ -602,9 +639,11 @@ impl NodeContext<'_> {
         if self.free_start(hit) {
             blocked = hit.take();
         }
-        // The rules that judge the touching parts, in turn, on the parts at the contact.
+        // The rules that judge the touching parts, in turn, on the parts at the contact
+        // (`beyond`, the dearest, last).
         let judged = node.release.is_some()
             || node.rear.is_some()
+            || node.beyond.is_some()
             || node.narrow.is_some()
             || node.beside.is_some();
         if let (Some(t), true) = (hit, judged) {
@@ -613,7 +652,8 @@ impl NodeContext<'_> {
             if !(self.release(&parts)
                 && self.rear(&parts)
                 && self.narrow(&parts)
-                && self.beside(&p, &parts))
+                && self.beside(&p, &parts)
+                && self.beyond(&parts))
             {
                 blocked = hit.take();
             }
@@ -1010,12 +1050,19 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         pts
     }
 
-    #[test]
-    fn a_body_slides_back_onto_a_back_it_does_not_reach_until_its_shanks_meet_the_seat() {
+    /// The built-in body at 1.75 m, the built-in sitting hierarchy and its backrest node's
+    /// index.
+    fn built_in_sitting() -> (Agent, Hierarchy, usize) {
         use crate::model::set::{BUILTIN_AGENT, BUILTIN_SITTING};
         let agent = Agent::from_toml(BUILTIN_AGENT, Path::new("human.toml"), 1.75).unwrap();
         let h = Hierarchy::from_toml(BUILTIN_SITTING, Path::new("sitting.toml"), &agent).unwrap();
         let backrest = h.ids().iter().position(|i| *i == "backrest").unwrap();
+        (agent, h, backrest)
+    }
+
+    #[test]
+    fn a_body_slides_back_onto_a_back_it_does_not_reach_until_its_shanks_meet_the_seat() {
+        let (agent, h, backrest) = built_in_sitting();
         let mut still = h.clone();
         still.nodes[backrest].slide = None;
         // A chair: seat and back, its seat's front face dropping to the floor.
@@ -1055,6 +1102,132 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         assert_eq!(x(&stopped), 0.45);
     }
 
+    /// A mattress top at 0.45 m from x = -1.0 to its front edge at x = 0.45, with a face
+    /// from that edge down to the floor, 0.6 m wide; a pillow on it from x = -0.30 to
+    /// -0.02 (top at 0.65 m, faces all round); with `headboard`, the mattress ends at a
+    /// headboard right behind the pillow at x = -0.32, up to 1.1 m. Points 1 cm apart.
+    fn mattress_and_pillow(headboard: bool) -> Vec<Point3<f64>> {
+        let cm = |i: i32| f64::from(i) * 0.01;
+        let mut pts = Vec::new();
+        let back = if headboard { -32 } else { -100 };
+        for j in -30..=30 {
+            for i in back..=45 {
+                pts.push(Point3::new(cm(i), cm(j), 0.45));
+            }
+            for k in 0..=45 {
+                pts.push(Point3::new(0.45, cm(j), cm(k)));
+            }
+            if headboard {
+                for k in 45..=110 {
+                    pts.push(Point3::new(-0.32, cm(j), cm(k)));
+                }
+            }
+        }
+        for j in -25..=25 {
+            for i in -30..=-2 {
+                pts.push(Point3::new(cm(i), cm(j), 0.65));
+            }
+            for k in 45..=65 {
+                pts.push(Point3::new(-0.02, cm(j), cm(k)));
+                pts.push(Point3::new(-0.30, cm(j), cm(k)));
+            }
+        }
+        for i in -30..=-2 {
+            for k in 45..=65 {
+                pts.push(Point3::new(cm(i), -0.25, cm(k)));
+                pts.push(Point3::new(cm(i), 0.25, cm(k)));
+            }
+        }
+        pts
+    }
+
+    #[test]
+    fn a_pillow_on_a_mattress_is_no_backrest_a_chair_back_is() {
+        let (agent, h, backrest) = built_in_sitting();
+        assert!(h.nodes[backrest].beyond.is_some());
+        let mut blind = h.clone();
+        blind.nodes[backrest].beyond = None;
+        let scene = |pts| Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene);
+        let fit = |x: f64| Fit {
+            placement: seated(x),
+            posture: h.initial.clone(),
+            stability: 1.0,
+            turned: false,
+        };
+        // On the mattress's edge, 0.12 m in front of the pillow, facing +x: the leaning
+        // trunk meets the pillow's top edge; beyond the pillow the mattress goes on.
+        let bed = scene(mattress_and_pillow(false));
+        let leaning = unfold(&agent, &blind, &bed, &fit(0.10), &CONTACT);
+        assert!(leaning.nodes[0].found && leaning.nodes[backrest].found);
+        let ruled = unfold(&agent, &h, &bed, &fit(0.10), &CONTACT);
+        assert!(ruled.nodes[0].found && !ruled.nodes[backrest].found);
+        // A pillow against a headboard has the headboard beyond it: a back.
+        let against = scene(mattress_and_pillow(true));
+        let propped = unfold(&agent, &h, &against, &fit(0.10), &CONTACT);
+        assert!(propped.nodes[backrest].found);
+        // A chair's back, with the floor far below behind it.
+        let chair = scene(seat_and_back(45, true));
+        let sat = unfold(&agent, &h, &chair, &fit(0.15), &CONTACT);
+        assert!(sat.nodes[0].found && sat.nodes[backrest].found);
+    }
+
+    /// A trunk stick of radius 5 cm, upright from 0.6 to 0.9 m, leaning 1 cm into the back
+    /// of [`seat_and_back`] (the plane x = 0); and the same 0.5 m further in front, where it
+    /// touches nothing.
+    fn trunk_at_the_back() -> (Cylinder, Cylinder) {
+        let r = 0.05;
+        let trunk = Cylinder {
+            joint: 1,
+            a: Point3::new(r - 0.01, 0.0, 0.6),
+            b: Point3::new(r - 0.01, 0.0, 0.9),
+            radius: r,
+        };
+        let away = Cylinder {
+            a: trunk.a + Vector3::new(0.5, 0.0, 0.0),
+            b: trunk.b + Vector3::new(0.5, 0.0, 0.0),
+            ..trunk
+        };
+        (trunk, away)
+    }
+
+    #[test]
+    fn beyond_needs_the_seat_to_go_on_for_its_length() {
+        use crate::model::hierarchy::Beyond;
+        let (a, h) = models();
+        // A seat at 0.45 m jutting 8 cm out behind its back (the plane x = 0, 0.45-1.0 m).
+        let mut pts = seat_and_back(45, false);
+        for j in 0..=60 {
+            for i in 1..=8 {
+                pts.push(Point3::new(
+                    -0.01 * f64::from(i),
+                    -0.3 + f64::from(j) * 0.01,
+                    0.45,
+                ));
+            }
+        }
+        let chair = Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene);
+        let p = seated(0.15);
+        let (trunk, away) = trunk_at_the_back();
+        assert!(chair.touches(&trunk));
+        let mut node = h.nodes[0].clone();
+        // The stick is 1 m tall: the walk looks 0.45 m on.
+        let rule = |length| {
+            Some(Beyond {
+                reach: 0.45,
+                gap: 0.2,
+                length,
+            })
+        };
+        node.beyond = rule(0.10);
+        assert!(with(&a, &h, &chair, &p, &node).beyond(&[trunk]));
+        node.beyond = rule(0.04);
+        assert!(!with(&a, &h, &chair, &p, &node).beyond(&[trunk]));
+        // A part that touches nothing, or a node without the rule, is not refused.
+        assert!(with(&a, &h, &chair, &p, &node).beyond(&[away]));
+        node.beyond = None;
+        assert!(with(&a, &h, &chair, &p, &node).beyond(&[trunk]));
+    }
+
     #[test]
     fn rear_accepts_a_chair_back_and_refuses_a_headboard() {
         use crate::model::hierarchy::Rear;
@@ -1068,13 +1241,7 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         let (chair, bed) = (scene(45), scene(200));
         // The pelvis 0.15 m in front of the back; a trunk leaning 1 cm into the back.
         let p = seated(0.15);
-        let r = 0.05;
-        let trunk = Cylinder {
-            joint: 1,
-            a: Point3::new(0.01 + r - 0.01, 0.0, 0.6),
-            b: Point3::new(0.01 + r - 0.01, 0.0, 0.9),
-            radius: r,
-        };
+        let (trunk, away) = trunk_at_the_back();
         assert!(chair.touches(&trunk) && bed.touches(&trunk));
         let mut node = h.nodes[0].clone();
         // The stick is 1 m tall: the seat may go on 0.45 m in front of the pelvis.
@@ -1085,11 +1252,6 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         assert!(with(&a, &h, &chair, &p, &node).rear(&[trunk]));
         assert!(!with(&a, &h, &bed, &p, &node).rear(&[trunk]));
         // A part that touches nothing, or a node without the rule, is not refused.
-        let away = Cylinder {
-            a: trunk.a + Vector3::new(0.5, 0.0, 0.0),
-            b: trunk.b + Vector3::new(0.5, 0.0, 0.0),
-            ..trunk
-        };
         assert!(with(&a, &h, &bed, &p, &node).rear(&[away]));
         node.rear = None;
         assert!(with(&a, &h, &bed, &p, &node).rear(&[trunk]));

@@ -283,6 +283,9 @@ pub struct Node {
     /// What the node finds stands at the rear of a seat, not at the head of a bed (`None`:
     /// no such test).
     pub rear: Option<Rear>,
+    /// What the node finds stands at the edge of the surface the body sits on, not on it
+    /// (`None`: no such test).
+    pub beyond: Option<Beyond>,
     /// Fraction of H: what the node's parts rest on ends within this far outwards from
     /// them, away from the body's midplane, within `support_gap` below (an armrest is a
     /// rest for one arm, a table top beside the body goes on). `None`: no such test.
@@ -322,6 +325,26 @@ pub struct Rear {
     pub reach: f64,
     /// Metres below the root joint within which the scene counts as the seat going on.
     pub gap: f64,
+}
+
+/// A node's `beyond` rule: a contact counts only if, walking on from where the part comes
+/// closest to the scene, away from the body (into what was touched, along the horizontal
+/// part of the contact's normal; outwards from the body's midplane where the normal is
+/// near vertical, as for a forearm resting on something), level with the top of the part,
+/// the surface the body sits on does not go on beyond what was touched within `reach`
+/// ([`crate::method::scene::Scene::goes_on_beyond`], with the root joint's height as the
+/// seat's level). A back or an arm stands at the edge of a seat, with the floor, a wall or
+/// nothing the scan saw beyond it; a pillow, a fold of a duvet or a lamp lies on the
+/// surface sat on, which goes on beyond it (an extension: the paper's nodes judge only the
+/// angle of the contact).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Beyond {
+    /// Fraction of the body height H: how far the walk goes on from the part.
+    pub reach: f64,
+    /// Metres below the root joint within which a surface counts as the seat going on.
+    pub gap: f64,
+    /// Metres the seat must go on beyond what was touched, at least.
+    pub length: f64,
 }
 
 /// A node's `beside` rule: a contact counts only if, over the body's midplane along the
@@ -518,6 +541,8 @@ struct NodeFile {
     #[serde(default)]
     rear: Option<RearFile>,
     #[serde(default)]
+    beyond: Option<BeyondFile>,
+    #[serde(default)]
     narrow: Option<f64>,
     #[serde(default)]
     slide: Option<SlideFile>,
@@ -528,6 +553,14 @@ struct NodeFile {
 struct SlideFile {
     steps: Vec<f64>,
     lift: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BeyondFile {
+    reach: f64,
+    gap: f64,
+    length: f64,
 }
 
 #[derive(Deserialize)]
@@ -1175,6 +1208,17 @@ fn resolve_node(
             })
         }
     };
+    let beyond = match &n.beyond {
+        None => None,
+        Some(r) => {
+            // As for `rear`: a metre below the pelvis is the floor under any seat.
+            Some(Beyond {
+                reach: fraction_of_h(src, &key.key("beyond").key("reach"), r.reach)?,
+                gap: gap_under_a_metre(src, &key.key("beyond").key("gap"), r.gap)?,
+                length: gap_under_a_metre(src, &key.key("beyond").key("length"), r.length)?,
+            })
+        }
+    };
     let narrow = n
         .narrow
         .map(|w| fraction_of_h(src, &key.key("narrow"), w))
@@ -1382,6 +1426,7 @@ fn resolve_node(
         unseen_reach: n.unseen_reach,
         beside,
         rear,
+        beyond,
         narrow,
         slide,
     })
@@ -1872,6 +1917,26 @@ mod tests {
         names(&e, line, "hypothesis.perch.max_walled", "share");
         let (e, line) = edited("rim_drop = 0.20", "rim_drop = -0.2");
         names(&e, line, "hypothesis.perch.rim_drop", "positive");
+    }
+
+    #[test]
+    fn a_bad_beyond_rule_is_named() {
+        let sitting = load(BUILTIN_SITTING).unwrap();
+        for id in ["armrest", "backrest"] {
+            let node = sitting.nodes.iter().find(|n| n.id == id).unwrap();
+            assert_eq!(
+                node.beyond.map(|b| (b.reach, b.gap, b.length)),
+                Some((0.45, 0.2, 0.1)),
+                "{id}"
+            );
+        }
+        let rule = "beyond = { reach = 0.45, gap = 0.20, length = 0.10 }  # length (m): the seat seen through";
+        let (e, line) = edited(rule, &rule.replace("length = 0.10", "length = 1.5"));
+        names(&e, line, "node.backrest.beyond.length", "under 1 metre");
+        let (e, line) = edited(rule, &rule.replace("reach = 0.45", "reach = 0"));
+        names(&e, line, "node.backrest.beyond.reach", "over 0");
+        let (e, line) = edited(rule, &rule.replace(", length = 0.10", ""));
+        names(&e, line, "node.backrest.beyond", "length");
     }
 
     #[test]
