@@ -506,32 +506,23 @@ impl Scene {
         ))
     }
 
-    /// The point of the axis of body part `c` (world) nearest to an occupied voxel, by the
-    /// distance field at voxel steps along it (the point [`Self::contact_normal`] reads the
-    /// field's gradient at); the part's first end where the field does not reach it.
-    pub fn nearest_axis_point(&self, c: &Cylinder) -> Point3<f64> {
-        let axis = c.b - c.a;
-        let n = to_usize((axis.norm() / self.voxel).ceil()).max(1);
-        let (mut best, mut at) = (f64::INFINITY, c.a);
-        for i in 0..=n {
-            let p = c.a + axis * (i as f64 / n as f64);
-            let d = self.point_clearance(&p);
-            if d < best {
-                best = d;
-                at = p;
-            }
-        }
-        at
-    }
-
     /// The direction (unit, world) in which the scene falls away from the body part `c` where
     /// it comes closest to it: the gradient of the distance field at the axis point nearest
     /// to an occupied voxel. For a forearm lying on an armrest it points up; for one
     /// touching a wall beside it, sideways. `None` with no voxels nearby (or only the floor,
     /// whose normal is +z).
     pub fn contact_normal(&self, c: &Cylinder) -> Option<Vector3<f64>> {
+        self.contact(c).map(|(_, n)| n)
+    }
+
+    /// Where body part `c` comes closest to the scene and the direction in which the scene
+    /// falls away from it there ([`Self::contact_normal`]): the axis point (world, at voxel
+    /// steps along the axis) whose distance-field cell is nearest to an occupied voxel,
+    /// with the field's gradient there; next to the floor, the part's lower end and +z.
+    pub fn contact(&self, c: &Cylinder) -> Option<(Point3<f64>, Vector3<f64>)> {
         if self.floor && floor_gap(c) <= self.voxel {
-            return Some(Vector3::z());
+            let low = if c.a.z <= c.b.z { c.a } else { c.b };
+            return Some((low, Vector3::z()));
         }
         let field = self.field.as_ref()?;
         let v = self.voxel;
@@ -547,11 +538,11 @@ impl Scene {
             if let Some(d) = field.get(key(&p)) {
                 if d < best {
                     best = d;
-                    at = Some(key(&p));
+                    at = Some((p, key(&p)));
                 }
             }
         }
-        let k = at?;
+        let (p, k) = at?;
         let g = |a: usize| {
             let (mut lo, mut hi) = (k, k);
             lo[a] -= 2;
@@ -562,7 +553,7 @@ impl Scene {
             }
         };
         let grad = Vector3::new(g(0), g(1), g(2));
-        (grad.norm() > 1e-9).then(|| grad.normalize())
+        (grad.norm() > 1e-9).then(|| (p, grad.normalize()))
     }
 
     /// How far (metres) the scene lies straight below `p`: the drop to the first occupied

@@ -17,8 +17,8 @@ use crate::model::hierarchy::{Fallback, Hierarchy, Node, Slide, Spread};
 use crate::num::to_usize;
 use nalgebra::{Point3, Vector3};
 
-/// Least length of the horizontal part of a unit contact normal for the `rear` rule to
-/// read a direction from it: sin 30 degrees; a normal within 30 degrees of vertical (the
+/// Least length of the horizontal part of a unit contact normal for the `rear` and
+/// `beyond` rules to read a direction from it: sin 30 degrees; a normal within 30 degrees of vertical (the
 /// top of a seat, a gentle slope) says nothing about what lies in front of the body.
 const REAR_MIN_HORIZONTAL: f64 = 0.5;
 
@@ -352,7 +352,7 @@ impl NodeContext<'_> {
 
     /// `beyond`: whether every part of `parts` that touches the scene touches something at
     /// the edge of the surface the body sits on: from the part's axis point nearest to the
-    /// scene, raised by its radius (level with its top), walking away from the body (into
+    /// scene ([`Scene::contact`]), raised by its radius (level with its top), walking away from the body (into
     /// what was touched, along the horizontal part of the contact's normal; outwards from
     /// the body's midplane where that normal is within 30 degrees of vertical), the
     /// surface at the root joint's level does not go on beyond what was touched
@@ -364,17 +364,16 @@ impl NodeContext<'_> {
         let reach = rule.reach * self.agent.height;
         let level = self.place.position.z;
         parts.iter().filter(|p| self.scene.touches(p)).all(|p| {
-            let Some(n) = self.scene.contact_normal(p) else {
+            let Some((near, n)) = self.scene.contact(p) else {
                 return true;
             };
-            let near = self.scene.nearest_axis_point(p);
-            let flat = nalgebra::Vector3::new(n.x, n.y, 0.0);
+            let flat = Vector3::new(n.x, n.y, 0.0);
             let dir = if flat.norm() >= REAR_MIN_HORIZONTAL {
                 -flat.normalize()
             } else {
                 self.outwards(&near)
             };
-            let from = nalgebra::Point3::new(near.x, near.y, near.z + p.radius);
+            let from = Point3::new(near.x, near.y, near.z + p.radius);
             !self
                 .scene
                 .goes_on_beyond(&from, &dir, reach, (level, rule.gap), rule.length)
@@ -383,9 +382,9 @@ impl NodeContext<'_> {
 
     /// The level unit direction square to the heading, away from the body's midplane (the
     /// vertical plane through the root joint along the heading), on the side of `at`.
-    fn outwards(&self, at: &nalgebra::Point3<f64>) -> nalgebra::Vector3<f64> {
+    fn outwards(&self, at: &Point3<f64>) -> Vector3<f64> {
         let (s, c) = self.place.yaw.sin_cos();
-        let left = nalgebra::Vector3::new(-s, c, 0.0);
+        let left = Vector3::new(-s, c, 0.0);
         if (at - self.place.position).dot(&left) >= 0.0 {
             left
         } else {
