@@ -1142,8 +1142,11 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
 
     #[test]
     fn a_pillow_on_a_mattress_is_no_backrest_a_chair_back_is() {
-        let (agent, h, backrest) = built_in_sitting();
+        let (agent, mut h, backrest) = built_in_sitting();
         assert!(h.nodes[backrest].beyond.is_some());
+        // The whole trunk checked, so that the rule alone decides (a pillow this high also
+        // touches the trunk above the span left out: see the next test).
+        h.nodes[backrest].spans = vec![[0.0, 1.0]];
         let mut blind = h.clone();
         blind.nodes[backrest].beyond = None;
         let scene = |pts| Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene);
@@ -1168,6 +1171,35 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         let chair = scene(seat_and_back(45, true));
         let sat = unfold(&agent, &h, &chair, &fit(0.15), &CONTACT);
         assert!(sat.nodes[0].found && sat.nodes[backrest].found);
+    }
+
+    #[test]
+    fn a_back_below_the_lumbar_spine_is_no_backrest() {
+        let (agent, h, backrest) = built_in_sitting();
+        let mut whole = h.clone();
+        whole.nodes[backrest].spans = vec![[0.0, 1.0]];
+        // A seat at 0.45 m, its front face dropping to the floor at x = 0.45, and a back
+        // (the plane x = 0) rising `cm` above it, with nothing behind.
+        let chair = |cm: usize| {
+            let mut pts = seat_and_back(45, true);
+            pts.retain(|p| p.x > 0.0 || p.z <= 0.45 + cm as f64 * 0.01);
+            Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene)
+        };
+        let fit = Fit {
+            placement: seated(0.12),
+            posture: h.initial.clone(),
+            stability: 1.0,
+            turned: false,
+        };
+        // A rim 0.15 m high (a pillow's height) touches the trunk only at its lowest part.
+        let rim = chair(15);
+        let all = unfold(&agent, &whole, &rim, &fit, &CONTACT);
+        assert!(all.nodes[0].found && all.nodes[backrest].found);
+        let lumbar = unfold(&agent, &h, &rim, &fit, &CONTACT);
+        assert!(lumbar.nodes[0].found && !lumbar.nodes[backrest].found);
+        // A back 0.30 m high holds the lumbar spine.
+        let back = unfold(&agent, &h, &chair(30), &fit, &CONTACT);
+        assert!(back.nodes[backrest].found);
     }
 
     /// A trunk stick of radius 5 cm, upright from 0.6 to 0.9 m, leaning 1 cm into the back

@@ -1800,7 +1800,7 @@ mod tests {
 
     #[test]
     fn an_unknown_link_is_named() {
-        let (e, line) = edited("links = [\"torso\"]", "links = [\"trunk\"]");
+        let (e, line) = edited("links = [{ link = \"torso\"", "links = [{ link = \"trunk\"");
         names(&e, line, "node.backrest.links", "unknown link `trunk`");
         let (e, line) = edited(
             "stability_links = [\"pelvis\"]",
