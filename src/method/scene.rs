@@ -628,8 +628,8 @@ impl Scene {
     /// Whether a surface under a level walk ends: from `from` along the unit direction
     /// `dir`, in steps of one voxel up to `limit` metres, some probe has no scene within
     /// `gap` metres below it ([`Self::drop_below`]). Space the scan did not see ends it.
-    /// The `rear` and `narrow` rules of a node walk this way (what a back or an arm stands
-    /// on ends within a seat's depth or an arm's width).
+    /// The `narrow` rule of a node walks this way (what an arm stands on ends within an
+    /// arm's width); `rear` steps over unseen space ([`Self::seat_ends`]).
     pub fn surface_ends(
         &self,
         from: &Point3<f64>,
@@ -646,6 +646,30 @@ impl Scene {
             s += step;
         }
         false
+    }
+
+    /// Whether the surface sat on ends under a level walk, as [`Self::surface_ends`], but
+    /// stepping over space the scan did not see: a probe with no scene within `gap` below
+    /// ends it only where the scan saw something lower in its column (the floor in front
+    /// of a seat's edge, the side of a bed: [`Self::sees_below`] from the bottom of the
+    /// band); a column seen nowhere (the shadow a pillow or a fold casts on a mattress
+    /// from the camera's side) is stepped over, and the surface ends there only if the
+    /// walk's last probes are in it (nothing says the surface goes on). The `rear` rule of
+    /// a node walks this way: a mattress goes on in front of a headboard through the
+    /// shadows on it.
+    pub fn seat_ends(&self, from: &Point3<f64>, dir: &Vector3<f64>, limit: f64, gap: f64) -> bool {
+        let step = self.voxel;
+        let mut s = step;
+        let mut unseen = false;
+        while s <= limit {
+            let q = from + dir * s;
+            unseen = self.drop_below(&q, gap) > gap;
+            if unseen && self.sees_below(&Point3::new(q.x, q.y, q.z - gap), step / 2.0) {
+                return true;
+            }
+            s += step;
+        }
+        unseen
     }
 
     /// Whether the scan saw anything in the column below `p`: some voxel within `reach`
@@ -2147,6 +2171,40 @@ mod tests {
         assert!(at(0.65, 0.3), "within the reach of the slab's edge");
         assert!(!at(0.8, 0.3), "between them: nothing seen below");
         assert!(!at(0.3, 2.0), "beyond everything");
+    }
+
+    #[test]
+    fn a_seat_goes_on_through_a_shadow_and_ends_at_a_seen_drop() {
+        // A mattress at 0.5 m from x = 0 to 2 m with a strip 0.2 m wide missing at x =
+        // 0.4-0.6 (a pillow's shadow); with `floor`, the floor seen under the strip.
+        let bed = |floor: bool| {
+            let mut pts = Vec::new();
+            for i in 0..=200 {
+                let x = f64::from(i) * 0.01;
+                for j in 0..=40 {
+                    let y = f64::from(j) * 0.01;
+                    if !(0.4..=0.6).contains(&x) {
+                        pts.push(Point3::new(x, y, 0.5));
+                    } else if floor {
+                        pts.push(Point3::new(x, y, 0.0));
+                    }
+                }
+            }
+            Scene::new(&PointCloud::new(pts), &cfg(true))
+        };
+        let from = Point3::new(0.1, 0.2, 0.6);
+        let along = Vector3::x();
+        let (shadow, gap) = (bed(false), bed(true));
+        // The walk of `surface_ends` stops at the strip either way.
+        assert!(shadow.surface_ends(&from, &along, 1.0, 0.2));
+        assert!(gap.surface_ends(&from, &along, 1.0, 0.2));
+        // Stepping over what was not seen, the mattress goes on past the shadow ...
+        assert!(!shadow.seat_ends(&from, &along, 1.0, 0.2));
+        // ... but not past a seen drop, nor where the walk ends in the shadow.
+        assert!(gap.seat_ends(&from, &along, 1.0, 0.2));
+        assert!(shadow.seat_ends(&from, &along, 0.45, 0.2));
+        // Off the mattress's far edge nothing is seen: the walk ends there, unseen.
+        assert!(shadow.seat_ends(&from, &along, 2.5, 0.2));
     }
 
     fn vertical(x: f64, y: f64, bottom: f64, top: f64, r: f64) -> Cylinder {

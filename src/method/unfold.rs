@@ -329,8 +329,9 @@ impl NodeContext<'_> {
     /// the seat: from the root joint (the placement's position), along the horizontal part
     /// of the contact's normal ([`Scene::contact_normal`], pointing away from what was
     /// touched), the scene stops holding a surface within the rule's `gap` below the root
-    /// joint before the rule's `reach` (fraction of H). A contact whose normal is nearly
-    /// vertical has no such direction and passes. True when the node has no `rear` rule.
+    /// joint before the rule's `reach` (fraction of H), stepping over space the scan did
+    /// not see ([`Scene::seat_ends`]). A contact whose normal is nearly vertical has no
+    /// such direction and passes. True when the node has no `rear` rule.
     pub fn rear(&self, parts: &[Cylinder]) -> bool {
         let Some(rule) = self.node.rear else {
             return true;
@@ -346,7 +347,7 @@ impl NodeContext<'_> {
                 return true;
             }
             self.scene
-                .surface_ends(&self.place.position, &flat.normalize(), reach, rule.gap)
+                .seat_ends(&self.place.position, &flat.normalize(), reach, rule.gap)
         })
     }
 
@@ -1282,6 +1283,24 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         });
         assert!(with(&a, &h, &chair, &p, &node).rear(&[trunk]));
         assert!(!with(&a, &h, &bed, &p, &node).rear(&[trunk]));
+        // A pillow's shadow across the mattress in front of the pelvis (nothing seen at
+        // x = 0.25-0.45): the mattress goes on beyond it, and the headboard stays refused;
+        // with the floor seen through the gap, the seat ends there.
+        let cut = |floor: bool| {
+            let mut pts = seat_and_back(200, false);
+            pts.retain(|q| (q.z - 0.45).abs() > 1e-9 || !(0.25..=0.45).contains(&q.x));
+            if floor {
+                for i in 25..=45 {
+                    for j in -30..=30 {
+                        pts.push(Point3::new(f64::from(i) * 0.01, f64::from(j) * 0.01, 0.0));
+                    }
+                }
+            }
+            Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene)
+        };
+        let (shadowed, gap) = (cut(false), cut(true));
+        assert!(!with(&a, &h, &shadowed, &p, &node).rear(&[trunk]));
+        assert!(with(&a, &h, &gap, &p, &node).rear(&[trunk]));
         // A part that touches nothing, or a node without the rule, is not refused.
         assert!(with(&a, &h, &bed, &p, &node).rear(&[away]));
         node.rear = None;
