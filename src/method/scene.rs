@@ -637,15 +637,7 @@ impl Scene {
         limit: f64,
         gap: f64,
     ) -> bool {
-        let step = self.voxel;
-        let mut s = step;
-        while s <= limit {
-            if self.drop_below(&(from + dir * s), gap) > gap {
-                return true;
-            }
-            s += step;
-        }
-        false
+        self.walk_ends(from, dir, limit, gap, false)
     }
 
     /// Whether the surface sat on ends under a level walk, as [`Self::surface_ends`], but
@@ -658,13 +650,30 @@ impl Scene {
     /// a node walks this way: a mattress goes on in front of a headboard through the
     /// shadows on it.
     pub fn seat_ends(&self, from: &Point3<f64>, dir: &Vector3<f64>, limit: f64, gap: f64) -> bool {
+        self.walk_ends(from, dir, limit, gap, true)
+    }
+
+    /// The walk of [`Self::surface_ends`] (`over_unseen` false) and [`Self::seat_ends`]
+    /// (true): true at the first probe with nothing within `gap` below, unless
+    /// `over_unseen` and the scan saw nothing lower in its column either; at the end of
+    /// the walk, whether its last probe was such an unseen one.
+    fn walk_ends(
+        &self,
+        from: &Point3<f64>,
+        dir: &Vector3<f64>,
+        limit: f64,
+        gap: f64,
+        over_unseen: bool,
+    ) -> bool {
         let step = self.voxel;
         let mut s = step;
         let mut unseen = false;
         while s <= limit {
             let q = from + dir * s;
             unseen = self.drop_below(&q, gap) > gap;
-            if unseen && self.sees_below(&Point3::new(q.x, q.y, q.z - gap), step / 2.0) {
+            if unseen
+                && (!over_unseen || self.sees_below(&Point3::new(q.x, q.y, q.z - gap), step / 2.0))
+            {
                 return true;
             }
             s += step;

@@ -18,8 +18,9 @@ use crate::num::to_usize;
 use nalgebra::{Point3, Vector3};
 
 /// Least length of the horizontal part of a unit contact normal for the `rear` and
-/// `beyond` rules to read a direction from it: sin 30 degrees; a normal within 30 degrees of vertical (the
-/// top of a seat, a gentle slope) says nothing about what lies in front of the body.
+/// `beyond` rules to read a direction from it: sin 30 degrees; a normal within 30 degrees
+/// of vertical (the top of a seat, a gentle slope) says nothing about what lies in front
+/// of the body.
 const REAR_MIN_HORIZONTAL: f64 = 0.5;
 
 /// The outcome of one node.
@@ -353,11 +354,11 @@ impl NodeContext<'_> {
 
     /// `beyond`: whether every part of `parts` that touches the scene touches something at
     /// the edge of the surface the body sits on: from the part's axis point nearest to the
-    /// scene ([`Scene::contact`]), raised by its radius (level with its top), walking away from the body (into
-    /// what was touched, along the horizontal part of the contact's normal; outwards from
-    /// the body's midplane where that normal is within 30 degrees of vertical), the
-    /// surface at the root joint's level does not go on beyond what was touched
-    /// ([`Scene::goes_on_beyond`]). True when the node has no `beyond` rule.
+    /// scene ([`Scene::contact`]), raised by its radius (level with its top), walking away
+    /// from the body (into what was touched, along the horizontal part of the contact's
+    /// normal; outwards from the body's midplane where that normal is within 30 degrees of
+    /// vertical), the surface at the root joint's level does not go on beyond what was
+    /// touched ([`Scene::goes_on_beyond`]). True when the node has no `beyond` rule.
     pub fn beyond(&self, parts: &[Cylinder]) -> bool {
         let Some(rule) = self.node.beyond else {
             return true;

@@ -1198,27 +1198,29 @@ fn resolve_node(
             })
         }
     };
-    let rear = match &n.rear {
-        None => None,
-        Some(r) => {
-            // A metre below the pelvis is the floor under any seat.
-            Some(Rear {
-                reach: fraction_of_h(src, &key.key("rear").key("reach"), r.reach)?,
-                gap: gap_under_a_metre(src, &key.key("rear").key("gap"), r.gap)?,
-            })
-        }
+    // The walks of `rear` and `beyond`: a reach in H and a gap below the pelvis under a
+    // metre (a metre below the pelvis is the floor under any seat).
+    let walk = |name: &str, reach: f64, gap: f64| -> Result<(f64, f64), ModelError> {
+        let key = key.key(name);
+        Ok((
+            fraction_of_h(src, &key.key("reach"), reach)?,
+            gap_under_a_metre(src, &key.key("gap"), gap)?,
+        ))
     };
-    let beyond = match &n.beyond {
-        None => None,
-        Some(r) => {
-            // As for `rear`: a metre below the pelvis is the floor under any seat.
-            Some(Beyond {
-                reach: fraction_of_h(src, &key.key("beyond").key("reach"), r.reach)?,
-                gap: gap_under_a_metre(src, &key.key("beyond").key("gap"), r.gap)?,
-                length: gap_under_a_metre(src, &key.key("beyond").key("length"), r.length)?,
-            })
-        }
-    };
+    let rear = n
+        .rear
+        .as_ref()
+        .map(|r| walk("rear", r.reach, r.gap).map(|(reach, gap)| Rear { reach, gap }))
+        .transpose()?;
+    let beyond = n
+        .beyond
+        .as_ref()
+        .map(|r| {
+            let (reach, gap) = walk("beyond", r.reach, r.gap)?;
+            let length = gap_under_a_metre(src, &key.key("beyond").key("length"), r.length)?;
+            Ok::<_, ModelError>(Beyond { reach, gap, length })
+        })
+        .transpose()?;
     let narrow = n
         .narrow
         .map(|w| fraction_of_h(src, &key.key("narrow"), w))
