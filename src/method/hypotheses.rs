@@ -114,9 +114,10 @@ fn hypotheses_in_pieces(
                 continue;
             }
             // The surface reaches further than the band's rows: read from the map.
-            let shape = surface_rule
-                .as_ref()
-                .map(|(sr, disc)| (sr, surface(map, ix, iy, disc, mean, sr.tolerance)));
+            let shape = surface_rule.as_ref().map(|(sr, disc)| {
+                let rise = sr.rise.unwrap_or(sr.tolerance);
+                (sr, surface(map, ix, iy, disc, mean, sr.tolerance, rise))
+            });
             if let Some((sr, shape)) = &shape {
                 if shape.width < sr.min_width * body_height {
                     continue;
@@ -225,6 +226,7 @@ impl Perch {
             iy,
             &self.disc,
             r.mean,
+            self.tolerance,
             self.tolerance,
             self.rim_drop,
             Some(self.longest),
@@ -552,9 +554,14 @@ impl SurfaceShape {
 }
 
 /// The flat surface round cell `(ix, iy)` of `map`: the cells of `neighbourhood` (cell
-/// offsets) within `tolerance` metres of `level`, reached from the cell through cells of
-/// the surface or invalid ones (a hole in the scan is not an edge), 4-connected, taken as
-/// a 2-D point set whose principal axes give its long axis and width.
+/// offsets) within `tolerance` metres of `level`, and the folds lying on it (cells up to
+/// `rise` metres above `level` beyond which the surface goes on at its level or is not
+/// seen: a duvet's folds and lumps on a mattress), reached from the cell through such
+/// cells or invalid ones (a hole in the scan is not an edge), 4-connected, taken as a 2-D
+/// point set whose principal axes give its long axis and width. A cell lower than
+/// `tolerance` below is an edge (a drop where the legs hang), and so is one higher than
+/// `rise` above (something standing on the surface, or that it stands against). With
+/// `rise` at most `tolerance`, the cells within `tolerance` of `level` only.
 pub fn surface(
     map: &impl Cells,
     ix: usize,
@@ -562,6 +569,7 @@ pub fn surface(
     neighbourhood: &[(isize, isize)],
     level: f64,
     tolerance: f64,
+    rise: f64,
 ) -> SurfaceShape {
     rimmed_surface(
         map,
@@ -570,12 +578,14 @@ pub fn surface(
         neighbourhood,
         level,
         tolerance,
+        rise,
         tolerance,
         None,
     )
 }
 
-/// [`surface`], with the share of its bounding cells that do not drop at least `rim`
+/// [`surface`] (folds up to `rise` above `level` crossed), with the share
+/// of its bounding cells that do not drop at least `rim`
 /// metres below `level` as [`SurfaceShape::walled`]: a stool's top drops to the floor or
 /// its ring all round, a box on a desk to the desk. With `longest` (metres), a surface
 /// with too many cells to be at most that long is given up early, as of infinite length.
@@ -587,15 +597,16 @@ fn rimmed_surface(
     neighbourhood: &[(isize, isize)],
     level: f64,
     tolerance: f64,
+    rise: f64,
     rim: f64,
     longest: Option<f64>,
 ) -> SurfaceShape {
-    // Some(true): on the surface; Some(false): another height (an edge); None: no data.
-    let on = |dx: isize, dy: isize| {
-        map.height(ix as isize + dx, iy as isize + dy)
-            .map(|h| (h - level).abs() <= tolerance)
-    };
-    if on(0, 0) != Some(true) {
+    let at = |dx: isize, dy: isize| map.height(ix as isize + dx, iy as isize + dy);
+    // Cells within `tolerance` of the level, or up to `rise` above it (a fold lying on
+    // the surface): the others bound it.
+    let crossed = |h: f64| (-tolerance..=rise.max(tolerance)).contains(&(h - level));
+    let raised = |h: f64| h - level > tolerance && crossed(h);
+    if !at(0, 0).is_some_and(|h| (h - level).abs() <= tolerance) {
         return SurfaceShape::default();
     }
     // Offsets as indices of a (2r + 1)^2 square: which are in the neighbourhood, which
@@ -605,6 +616,34 @@ fn rimmed_surface(
         .map(|&(dx, dy)| dx.abs().max(dy.abs()))
         .max()
         .unwrap_or(0);
+    // Whether a reached cell is part of the surface: one within `tolerance` of the level
+    // is; a raised one is a fold lying on it when, along the line from the place, the
+    // first cell seen beyond the raised ones is level with the place again (the surface
+    // goes on under the fold) or none is seen (the fold's shadow); not when that cell is
+    // higher (a reclined back rising on) or lower (the fold is the surface's edge, a leg
+    // rest sloping off its side).
+    let counts = |dx: isize, dy: isize| match at(dx, dy) {
+        Some(h) if raised(h) => {
+            let len = ((dx * dx + dy * dy) as f64).sqrt();
+            for k in 1..=2 * r {
+                let t = 1.0 + k as f64 / len;
+                let (x, y) = (
+                    to_isize((dx as f64 * t).round()),
+                    to_isize((dy as f64 * t).round()),
+                );
+                if x.abs() > r || y.abs() > r {
+                    break;
+                }
+                match at(x, y) {
+                    Some(h) if !raised(h) => return (h - level).abs() <= tolerance,
+                    _ => {}
+                }
+            }
+            true
+        }
+        Some(h) => (h - level).abs() <= tolerance,
+        None => false,
+    };
     let side = 2 * r + 1;
     let index = |dx: isize, dy: isize| ((dy + r) * side + dx + r).unsigned_abs();
     let mut inside = vec![false; index(r, r) + 1];
@@ -626,7 +665,7 @@ fn rimmed_surface(
         std::f64::consts::FRAC_PI_3 * (c * c + 1.0) + 1.0
     });
     while let Some((dx, dy)) = stack.pop() {
-        if on(dx, dy) == Some(true) {
+        if counts(dx, dy) {
             let (x, y) = (dx as f64 * map.cell_size(), dy as f64 * map.cell_size());
             n += 1.0;
             if most.is_some_and(|m| n > m) {
@@ -650,8 +689,8 @@ fn rimmed_surface(
                 continue;
             }
             seen[k] = true;
-            match map.height(ix as isize + nx, iy as isize + ny) {
-                Some(h) if (h - level).abs() > tolerance => {
+            match at(nx, ny) {
+                Some(h) if !crossed(h) => {
                     // An edge of the surface: a drop where legs hang, or a step to
                     // something it stands on or that stands on it.
                     edges += 1.0;
@@ -882,10 +921,11 @@ mod tests {
                 })
             };
             for m in [map_of(41, round), map_of(41, oblong)] {
-                let whole = rimmed_surface(&m, 20, 20, &disc, 0.7, 0.05, 0.2, None);
+                let whole = rimmed_surface(&m, 20, 20, &disc, 0.7, 0.05, 0.05, 0.2, None);
                 for k in 1..=18 {
                     let longest = 0.05 * k as f64;
-                    let early = rimmed_surface(&m, 20, 20, &disc, 0.7, 0.05, 0.2, Some(longest));
+                    let early =
+                        rimmed_surface(&m, 20, 20, &disc, 0.7, 0.05, 0.05, 0.2, Some(longest));
                     if early.length.is_infinite() {
                         assert!(whole.length > longest, "{size}, {longest}: {whole:?}");
                         given_up += 1;
@@ -1132,6 +1172,11 @@ mod tests {
         })
     }
 
+    /// [`surface`] at a seat's level (0.45 m) within 5 cm, no folds crossed.
+    fn seat_level(m: &HeightMap, ix: usize, iy: usize, disc: &[(isize, isize)]) -> SurfaceShape {
+        surface(m, ix, iy, disc, 0.45, 0.05, 0.05)
+    }
+
     #[test]
     fn the_surface_of_a_strip_has_its_width_and_its_direction() {
         // Half a 1.75 m body round the place (0.875 m, 17 cells).
@@ -1139,30 +1184,92 @@ mod tests {
         let disc = m.disc(0.875);
         let narrow = strip(12.0, 0.0, |_, _| false);
         // A 0.95 m (19 cells) bed: about 0.9 m measured; a 0.65 m sofa seat less than 0.7.
-        let bed = surface(&m, 20, 20, &disc, 0.45, 0.05);
-        let seat = surface(&narrow, 20, 20, &disc, 0.45, 0.05);
+        let bed = seat_level(&m, 20, 20, &disc);
+        let seat = seat_level(&narrow, 20, 20, &disc);
         assert!((bed.width - 0.9).abs() < 0.06, "{bed:?}");
         assert!(seat.width < 0.66 && seat.width > 0.55, "{seat:?}");
         // Along x, elongated enough for a heading; off the surface, nothing.
         assert!(bed
             .along(1.3)
             .is_some_and(|a| a.abs() < 1e-9 || (a - PI).abs() < 1e-9));
-        assert_eq!(surface(&m, 0, 0, &disc, 0.45, 0.05).width, 0.0);
+        assert_eq!(seat_level(&m, 0, 0, &disc).width, 0.0);
         // Turned 30 degrees, the axis turns with it.
-        let turned = surface(&strip(18.0, 30.0, |_, _| false), 20, 20, &disc, 0.45, 0.05);
+        let turned = seat_level(&strip(18.0, 30.0, |_, _| false), 20, 20, &disc);
         let a = turned.along(1.3).expect("a long axis");
         assert!((a - 30f64.to_radians()).abs() < 0.05, "{}", a.to_degrees());
     }
 
     #[test]
+    fn a_duvets_folds_do_not_cut_the_surface_and_a_back_does() {
+        let disc = strip(18.0, 0.0, |_, _| false).disc(0.875);
+        // A 0.95 m bed (rows 11-29) along x with two folds along it, 0.08 m high, four
+        // rows either side of the place.
+        let folded = |back: bool| {
+            let bed = strip(18.0, 0.0, |_, _| false);
+            map_of(40, move |x, y| {
+                let h = bed.get(x as isize, y as isize)?;
+                Some(match y {
+                    16 | 24 if h > 0.0 => h + 0.08,
+                    // A sofa's back, 0.35 m above its seat, from row 25 on.
+                    25.. if back && h > 0.0 => h + 0.35,
+                    _ => h,
+                })
+            })
+        };
+        // Level within 5 cm both ways: the folds cut the bed down to the 7 rows between.
+        let cut = seat_level(&folded(false), 20, 20, &disc);
+        assert!(cut.width < 0.4, "{cut:?}");
+        // Folds up to 0.10 m above the level are on the surface: the bed's whole width.
+        let whole = surface(&folded(false), 20, 20, &disc, 0.45, 0.05, 0.10);
+        assert!((whole.width - 0.9).abs() < 0.06, "{whole:?}");
+        // The last fold at the surface's edge: counted where its shadow hides what lies
+        // beyond (rows 25-29 unseen), not where the floor is seen beyond it.
+        let edged = |beyond: Option<f64>| {
+            let m = folded(false);
+            map_of(40, move |x, y| match y {
+                25..=29 => beyond,
+                _ => m.get(x as isize, y as isize),
+            })
+        };
+        let shadowed = surface(&edged(None), 20, 20, &disc, 0.45, 0.05, 0.10);
+        let dropped = surface(&edged(Some(0.0)), 20, 20, &disc, 0.45, 0.05, 0.10);
+        assert!(
+            shadowed.width > dropped.width + 0.02,
+            "{shadowed:?} {dropped:?}"
+        );
+        // A back 0.35 m high still ends it (rows 11-23 are left, but for the fold).
+        let backed = surface(&folded(true), 20, 20, &disc, 0.45, 0.05, 0.10);
+        assert!(backed.width < 0.7 && backed.width > 0.5, "{backed:?}");
+        // A seat 0.65 m deep (rows 14-26) whose back reclines from row 27 on, rising
+        // 3.5 cm a row: its rows 28 and 29 (7 and 10.5 cm up) are crossed, but no seat lies
+        // beyond them, so the seat is as wide as with the folds not crossed.
+        let seat = strip(12.0, 0.0, |_, _| false);
+        let reclined = map_of(40, |x, y| {
+            let h = seat.get(x as isize, y as isize)?;
+            Some(if y >= 27 {
+                0.45 + 0.035 * (y - 26) as f64
+            } else {
+                h
+            })
+        });
+        let crossing = surface(&reclined, 20, 20, &disc, 0.45, 0.05, 0.10);
+        let level = seat_level(&reclined, 20, 20, &disc);
+        assert!(
+            (crossing.width - level.width).abs() < 1e-9,
+            "{crossing:?} {level:?}"
+        );
+        assert!(crossing.width < 0.7, "{crossing:?}");
+    }
+
+    #[test]
     fn holes_do_not_end_the_surface_and_edges_do() {
         let disc = strip(18.0, 0.0, |_, _| false).disc(0.875);
-        let whole = surface(&strip(18.0, 0.0, |_, _| false), 20, 20, &disc, 0.45, 0.05);
+        let whole = seat_level(&strip(18.0, 0.0, |_, _| false), 20, 20, &disc);
         // Every third row of the bed missing (a sparse scan): the same width.
         let holed = strip(18.0, 0.0, |x, y| {
             y % 3 == 0 && x != 20 && (12..29).contains(&y)
         });
-        let holed = surface(&holed, 20, 20, &disc, 0.45, 0.05);
+        let holed = seat_level(&holed, 20, 20, &disc);
         assert!(
             (holed.width - whole.width).abs() < 0.05,
             "{holed:?} {whole:?}"
@@ -1175,7 +1282,7 @@ mod tests {
                 0.0
             })
         });
-        assert_eq!(surface(&square, 20, 20, &disc, 0.45, 0.05).along(1.3), None);
+        assert_eq!(seat_level(&square, 20, 20, &disc).along(1.3), None);
     }
 
     #[test]
@@ -1184,6 +1291,7 @@ mod tests {
         r.surface = Some(crate::model::hierarchy::SurfaceRule {
             radius: 0.5,
             tolerance: 0.05,
+            rise: None,
             min_width: 0.4,
             elongation: 1.3,
         });

@@ -128,6 +128,11 @@ pub struct SurfaceRule {
     pub radius: f64,
     /// Cells within this height (metres) of the template's mean height are on the surface.
     pub tolerance: f64,
+    /// Cells up to this height (metres) above the template's mean height are folds lying
+    /// on the surface (a duvet's), crossed, and counted where it goes on beyond them at
+    /// its level or is not seen there. `None`: no folds, the cells within `tolerance` only.
+    #[serde(default)]
+    pub rise: Option<f64>,
     /// Least width of the surface across its long axis, fraction of H.
     pub min_width: f64,
     /// Least ratio of the surface's spread along its long axis to its spread across
@@ -1024,6 +1029,11 @@ fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
                 return Err(src.invalid(&surface.key(key), Positive.what(v)));
             }
         }
+        if let Some(v) = a.rise {
+            if !NonNegative.holds(v) {
+                return Err(src.invalid(&surface.key("rise"), NonNegative.what(v)));
+            }
+        }
         if !(a.elongation.is_finite() && a.elongation >= 1.0) {
             return Err(src.invalid(
                 &surface.key("elongation"),
@@ -1834,7 +1844,7 @@ mod tests {
     #[test]
     fn a_bad_surface_rule_is_named() {
         let rule =
-            "surface = { radius = 0.5, tolerance = 0.05, min_width = 0.40, elongation = 1.3 }";
+            "surface = { radius = 0.5, tolerance = 0.05, rise = 0.10, min_width = 0.40, elongation = 1.3 }";
         let lying = crate::model::set::BUILTIN_LYING;
         assert_eq!(lying.matches(rule).count(), 1);
         assert!(load(lying).unwrap().hypothesis.surface.is_some());
@@ -1853,6 +1863,11 @@ mod tests {
                 rule.replace("radius = 0.5", "radius = 3.0"),
                 "radius",
                 "outside",
+            ),
+            (
+                rule.replace("rise = 0.10", "rise = -0.1"),
+                "rise",
+                "not be negative",
             ),
         ] {
             let bad = lying.replace(rule, &to);
