@@ -424,13 +424,9 @@ fn rate_top(
         // of the median), seen from the place; past the surface's edge it does not, and
         // the cell stays as roughness.
         let enclosed = |dx: isize, dy: isize| {
-            let len = ((dx * dx + dy * dy) as f64).sqrt();
-            len == 0.0
-                || (1..=reach).any(|k| {
-                    let t = 1.0 + k as f64 / len;
-                    let (x, y) = ((dx as f64 * t).round(), (dy as f64 * t).round());
-                    at(to_isize(x), to_isize(y)).is_some_and(|h| (h - median).abs() <= depth)
-                })
+            (dx, dy) == (0, 0)
+                || cells_beyond(dx, dy, reach)
+                    .any(|(x, y)| at(x, y).is_some_and(|h| (h - median).abs() <= depth))
         };
         kept = Moments::default();
         for &(dx, dy) in template {
@@ -457,6 +453,20 @@ fn rate_top(
             rule_.roughness.membership(roughness),
             height.map_or(1.0, |t| t.membership(mean)),
         ],
+    })
+}
+
+/// The cells past offset `(dx, dy)` (not the place itself) on the line from the place
+/// through it, one a step: the offset scaled by `1 + k / |(dx, dy)|`, rounded, for `k`
+/// from 1 to `steps` (so about a cell apart, outwards).
+fn cells_beyond(dx: isize, dy: isize, steps: isize) -> impl Iterator<Item = (isize, isize)> {
+    let len = ((dx * dx + dy * dy) as f64).sqrt();
+    (1..=steps).map(move |k| {
+        let t = 1.0 + k as f64 / len;
+        (
+            to_isize((dx as f64 * t).round()),
+            to_isize((dy as f64 * t).round()),
+        )
     })
 }
 
@@ -584,10 +594,9 @@ pub fn surface(
     )
 }
 
-/// [`surface`] (folds up to `rise` above `level` crossed), with the share
-/// of its bounding cells that do not drop at least `rim`
-/// metres below `level` as [`SurfaceShape::walled`]: a stool's top drops to the floor or
-/// its ring all round, a box on a desk to the desk. With `longest` (metres), a surface
+/// [`surface`] (folds up to `rise` above `level` crossed), with the share of its bounding
+/// cells that do not drop at least `rim` metres below `level` as [`SurfaceShape::walled`]:
+/// a stool's top drops to the floor or its ring all round, a box on a desk to the desk. With `longest` (metres), a surface
 /// with too many cells to be at most that long is given up early, as of infinite length.
 #[allow(clippy::too_many_arguments)]
 fn rimmed_surface(
@@ -623,24 +632,10 @@ fn rimmed_surface(
     // higher (a reclined back rising on) or lower (the fold is the surface's edge, a leg
     // rest sloping off its side).
     let counts = |dx: isize, dy: isize| match at(dx, dy) {
-        Some(h) if raised(h) => {
-            let len = ((dx * dx + dy * dy) as f64).sqrt();
-            for k in 1..=2 * r {
-                let t = 1.0 + k as f64 / len;
-                let (x, y) = (
-                    to_isize((dx as f64 * t).round()),
-                    to_isize((dy as f64 * t).round()),
-                );
-                if x.abs() > r || y.abs() > r {
-                    break;
-                }
-                match at(x, y) {
-                    Some(h) if !raised(h) => return (h - level).abs() <= tolerance,
-                    _ => {}
-                }
-            }
-            true
-        }
+        Some(h) if raised(h) => cells_beyond(dx, dy, 2 * r)
+            .take_while(|&(x, y)| x.abs() <= r && y.abs() <= r)
+            .find_map(|(x, y)| at(x, y).filter(|&h| !raised(h)))
+            .is_none_or(|h| (h - level).abs() <= tolerance),
         Some(h) => (h - level).abs() <= tolerance,
         None => false,
     };
