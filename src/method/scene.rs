@@ -583,11 +583,15 @@ impl Scene {
     /// is over what stands up (a back, an arm, a pillow, or `from` itself inside it). Past
     /// it, true once a surface has lain within `gap` below `level` under consecutive
     /// probes over `length` metres (the mattress beyond a pillow, the top of a night stand
-    /// beyond its lamp); false at the first probe with nothing there (the floor far below
-    /// a chair's back or a sofa's arm, the space behind a wall the scan did not see). A
-    /// stretch shorter than `length` (the seat seen through the gaps of a slatted back)
-    /// ends where something stands up again, and the walk goes on. False when the walk
-    /// meets nothing above `level`, or reaches `limit`.
+    /// beyond its lamp); false at the first probe with nothing there where the scan saw
+    /// something lower in its column (the floor far below a chair's back or a sofa's arm).
+    /// A column seen nowhere (the shadow a pillow casts on a mattress, the space behind a
+    /// wall) is stepped over: what the scan saw beyond it decides, and past a shadow a
+    /// column counts as at the seat's level only where nothing seen in it stands above
+    /// `level` ([`Self::top_at_most`]: a wall's foot seen under the shadow a chair's back
+    /// casts on it is no seat). A stretch shorter than `length` (the seat seen through the
+    /// gaps of a slatted back) ends where something stands up again, and the walk goes
+    /// on. False when the walk meets nothing above `level`, or reaches `limit`.
     pub fn goes_on_beyond(
         &self,
         from: &Point3<f64>,
@@ -598,6 +602,8 @@ impl Scene {
     ) -> bool {
         let bottom = level - gap;
         let mut over = false;
+        // Whether the walk has stepped over a shadow since it was over something.
+        let mut shadowed = false;
         // Where the current stretch at the seat's level began, metres along the walk.
         let mut stretch: Option<f64> = None;
         let mut s = 0.0;
@@ -608,16 +614,24 @@ impl Scene {
                 return false;
             }
             let d = self.drop_below(&q, depth);
-            if q.z - d > level {
+            // Past a shadow, a column with something seen above `level` (a wall whose
+            // foot the scan saw) stands up too.
+            let stands =
+                q.z - d > level || (shadowed && d.is_finite() && !self.top_at_most(&q, level));
+            if stands {
                 over = true;
                 stretch = None;
             } else if over {
-                if !d.is_finite() {
+                if d.is_finite() {
+                    let start = *stretch.get_or_insert(s);
+                    if s - start >= length {
+                        return true;
+                    }
+                } else if self.sees_below(&Point3::new(q.x, q.y, bottom), self.voxel / 2.0) {
                     return false;
-                }
-                let start = *stretch.get_or_insert(s);
-                if s - start >= length {
-                    return true;
+                } else {
+                    shadowed = true;
+                    stretch = None;
                 }
             }
             s += self.voxel;
@@ -645,10 +659,14 @@ impl Scene {
     /// ends it only where the scan saw something lower in its column (the floor in front
     /// of a seat's edge, the side of a bed: [`Self::sees_below`] from the bottom of the
     /// band); a column seen nowhere (the shadow a pillow or a fold casts on a mattress
-    /// from the camera's side) is stepped over, and the surface ends there only if the
-    /// walk's last probes are in it (nothing says the surface goes on). The `rear` rule of
-    /// a node walks this way: a mattress goes on in front of a headboard through the
-    /// shadows on it.
+    /// from the camera's side) is stepped over. Where the walk's last probes are in such a
+    /// shadow, it looks on past `limit`, over columns with something seen above the walk
+    /// ([`Self::top_at_most`]: a bag on the mattress, a wall), to the first other column
+    /// the scan saw something in: the surface goes on where that column holds it within
+    /// `gap` (the mattress beyond the shadow of a pillow or a bag), and ends where it holds
+    /// only something lower (the floor), or where the scene's box ends first. The `rear`
+    /// rule of a node walks this way: a mattress goes on in front of a headboard through
+    /// the shadows on it.
     pub fn seat_ends(&self, from: &Point3<f64>, dir: &Vector3<f64>, limit: f64, gap: f64) -> bool {
         self.walk_ends(from, dir, limit, gap, true)
     }
@@ -656,7 +674,8 @@ impl Scene {
     /// The walk of [`Self::surface_ends`] (`over_unseen` false) and [`Self::seat_ends`]
     /// (true): true at the first probe with nothing within `gap` below, unless
     /// `over_unseen` and the scan saw nothing lower in its column either; at the end of
-    /// the walk, whether its last probe was such an unseen one.
+    /// the walk, false unless its last probe was such an unseen one, and then what the
+    /// scan saw past it decides (see [`Self::seat_ends`]).
     fn walk_ends(
         &self,
         from: &Point3<f64>,
@@ -678,7 +697,45 @@ impl Scene {
             }
             s += step;
         }
-        unseen
+        // Unseen at the end only with `over_unseen`: `surface_ends` returned at it.
+        if !unseen {
+            return false;
+        }
+        // The walk ends in a shadow: what the scan saw past it decides. The surface goes
+        // on where a column with nothing seen above the walk holds it within `gap` (the
+        // mattress beyond a pillow's shadow), and ends where such a column holds only
+        // something lower (the floor) or nothing is seen before the scene's box ends. A
+        // column with something seen above the walk (a bag on the mattress, a wall whose
+        // foot was seen) says neither, and the look goes on past it.
+        let Some((lo, hi)) = self.occupied else {
+            return true;
+        };
+        loop {
+            let q = from + dir * s;
+            if q.x < lo.x || q.y < lo.y || q.x > hi.x || q.y > hi.y {
+                return true;
+            }
+            if self.top_at_most(&q, q.z) {
+                if self.drop_below(&q, gap) <= gap {
+                    return false;
+                }
+                if self.sees_below(&Point3::new(q.x, q.y, q.z - gap), step / 2.0) {
+                    return true;
+                }
+            }
+            s += step;
+        }
+    }
+
+    /// Whether nothing the scan saw in the vertical column through `p` lies above `level`
+    /// metres: the column's top is a surface at or below `level`, or nothing was seen in
+    /// it. A wall or the back of a chair standing in the column has its top above.
+    pub fn top_at_most(&self, p: &Point3<f64>, level: f64) -> bool {
+        let Some((_, hi)) = self.occupied else {
+            return true;
+        };
+        let top = Point3::new(p.x, p.y, hi.z + self.voxel);
+        top.z - self.drop_below(&top, top.z - level) <= level
     }
 
     /// Whether the scan saw anything in the column below `p`: some voxel within `reach`
@@ -2209,11 +2266,104 @@ mod tests {
         assert!(gap.surface_ends(&from, &along, 1.0, 0.2));
         // Stepping over what was not seen, the mattress goes on past the shadow ...
         assert!(!shadow.seat_ends(&from, &along, 1.0, 0.2));
-        // ... but not past a seen drop, nor where the walk ends in the shadow.
+        // ... but not past a seen drop.
         assert!(gap.seat_ends(&from, &along, 1.0, 0.2));
-        assert!(shadow.seat_ends(&from, &along, 0.45, 0.2));
+        // A walk ending in the shadow looks on past it: the mattress is seen beyond.
+        assert!(!shadow.seat_ends(&from, &along, 0.45, 0.2));
         // Off the mattress's far edge nothing is seen: the walk ends there, unseen.
         assert!(shadow.seat_ends(&from, &along, 2.5, 0.2));
+    }
+
+    /// Points 1 cm apart over x in `xs` (metres), y from 0 to 0.4 m, at height `z`.
+    fn strip(xs: std::ops::Range<f64>, z: f64, pts: &mut Vec<Point3<f64>>) {
+        let mut x = xs.start;
+        while x < xs.end {
+            for j in 0..=40 {
+                pts.push(Point3::new(x, f64::from(j) * 0.01, z));
+            }
+            x += 0.01;
+        }
+    }
+
+    /// Points 1 cm apart on the vertical plane x = `x`, y from 0 to 0.4 m, z in `zs`.
+    fn upright(x: f64, zs: std::ops::Range<f64>, pts: &mut Vec<Point3<f64>>) {
+        let mut z = zs.start;
+        while z < zs.end {
+            for j in 0..=40 {
+                pts.push(Point3::new(x, f64::from(j) * 0.01, z));
+            }
+            z += 0.01;
+        }
+    }
+
+    /// The scene (with the floor) of the points `build` writes.
+    fn scene_of(build: impl Fn(&mut Vec<Point3<f64>>)) -> Scene {
+        let mut pts = Vec::new();
+        build(&mut pts);
+        Scene::new(&PointCloud::new(pts), &cfg(true))
+    }
+
+    #[test]
+    fn past_a_shadow_only_a_surface_with_nothing_over_it_goes_on() {
+        // A seat at 0.5 m from x = 0 to 0.4, then nothing seen to x = 0.7 (a shadow);
+        // a walk from the pelvis (0.6 m high) to 0.5 m ends in the shadow and looks on.
+        let scene = |beyond: &dyn Fn(&mut Vec<Point3<f64>>)| {
+            scene_of(|p| {
+                strip(0.0..0.4, 0.5, p);
+                beyond(p);
+            })
+        };
+        let mattress = scene(&|p| strip(0.7..1.6, 0.45, p));
+        let floor = scene(&|p| strip(0.7..1.6, 0.0, p));
+        // A wall whose middle the shadow hides: its foot is seen at the seat's level.
+        let wall = scene(&|p| {
+            upright(0.8, 0.0..0.45, p);
+            upright(0.8, 0.9..1.4, p);
+        });
+        let from = Point3::new(0.1, 0.2, 0.6);
+        let along = Vector3::x();
+        assert!(!mattress.seat_ends(&from, &along, 0.5, 0.2));
+        assert!(floor.seat_ends(&from, &along, 0.5, 0.2));
+        assert!(wall.seat_ends(&from, &along, 0.5, 0.2));
+        // The wall's top is above the walk; the mattress's is not.
+        assert!(!wall.top_at_most(&Point3::new(0.8, 0.2, 0.6), 0.6));
+        assert!(mattress.top_at_most(&Point3::new(1.0, 0.2, 0.6), 0.6));
+        assert!(
+            wall.top_at_most(&Point3::new(1.2, 0.2, 0.6), 0.6),
+            "nothing seen"
+        );
+    }
+
+    #[test]
+    fn a_mattress_goes_on_beyond_a_pillows_shadow() {
+        // A mattress at 0.5 m from x = 0 to 0.3, a pillow from 0.3 to 0.5 (top 0.65 m),
+        // then its shadow to x = 0.8, then whatever `beyond` puts there.
+        let scene = |beyond: &dyn Fn(&mut Vec<Point3<f64>>)| {
+            scene_of(|p| {
+                strip(0.0..0.3, 0.5, p);
+                strip(0.3..0.5, 0.65, p);
+                upright(0.3, 0.5..0.65, p);
+                beyond(p);
+            })
+        };
+        let mattress = scene(&|p| strip(0.8..2.0, 0.5, p));
+        let floor = scene(&|p| strip(0.8..2.0, 0.0, p));
+        // A wall seen at its foot and its top, the shadow over its middle, crossed at a
+        // slant (0.15 m of it along the walk).
+        let wall = scene(&|p| {
+            for k in 0..15 {
+                let x = 0.9 + f64::from(k) * 0.01;
+                upright(x, 0.0..0.45, p);
+                upright(x, 0.9..1.4, p);
+            }
+        });
+        // From the forearm's top over the pillow, level with the pelvis at 0.6 m.
+        let from = Point3::new(0.4, 0.2, 0.7);
+        let along = Vector3::x();
+        let goes_on = |s: &Scene| s.goes_on_beyond(&from, &along, 0.8, (0.6, 0.2), 0.1);
+        assert!(goes_on(&mattress), "the mattress is seen beyond the shadow");
+        assert!(!goes_on(&floor), "the floor is seen beyond it");
+        assert!(!goes_on(&wall), "a wall's foot is no seat");
     }
 
     fn vertical(x: f64, y: f64, bottom: f64, top: f64, r: f64) -> Cylinder {
