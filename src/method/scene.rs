@@ -2274,26 +2274,31 @@ mod tests {
         assert!(shadow.seat_ends(&from, &along, 2.5, 0.2));
     }
 
-    /// Points 1 cm apart over x in `xs` (metres), y from 0 to 0.4 m, at height `z`.
-    fn strip(xs: std::ops::Range<f64>, z: f64, pts: &mut Vec<Point3<f64>>) {
+    /// Points 1 cm apart over x in `xs` and z in `zs` (metres, each from its start while
+    /// below its end), y from 0 to 0.4 m: a level strip for a one-step `zs`, an upright
+    /// sheet for a one-step `xs`.
+    fn sheet(xs: std::ops::Range<f64>, zs: std::ops::Range<f64>, pts: &mut Vec<Point3<f64>>) {
         let mut x = xs.start;
         while x < xs.end {
-            for j in 0..=40 {
-                pts.push(Point3::new(x, f64::from(j) * 0.01, z));
+            let mut z = zs.start;
+            while z < zs.end {
+                for j in 0..=40 {
+                    pts.push(Point3::new(x, f64::from(j) * 0.01, z));
+                }
+                z += 0.01;
             }
             x += 0.01;
         }
     }
 
-    /// Points 1 cm apart on the vertical plane x = `x`, y from 0 to 0.4 m, z in `zs`.
+    /// [`sheet`] level at height `z`.
+    fn strip(xs: std::ops::Range<f64>, z: f64, pts: &mut Vec<Point3<f64>>) {
+        sheet(xs, z..z + 0.005, pts);
+    }
+
+    /// [`sheet`] upright on the plane x = `x`.
     fn upright(x: f64, zs: std::ops::Range<f64>, pts: &mut Vec<Point3<f64>>) {
-        let mut z = zs.start;
-        while z < zs.end {
-            for j in 0..=40 {
-                pts.push(Point3::new(x, f64::from(j) * 0.01, z));
-            }
-            z += 0.01;
-        }
+        sheet(x..x + 0.005, zs, pts);
     }
 
     /// The scene (with the floor) of the points `build` writes.
