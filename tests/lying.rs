@@ -224,13 +224,44 @@ fn a_sofa_is_for_sitting_and_a_narrow_bed_for_lying() {
 
 /// The points of `c` with x in `range` (the rest out of the camera's view).
 fn seen(c: &PointCloud, range: std::ops::Range<f64>) -> PointCloud {
-    PointCloud::new(
-        c.points
-            .iter()
-            .filter(|p| range.contains(&p.x))
-            .copied()
-            .collect(),
-    )
+    seen_where(c, |p| range.contains(&p.x))
+}
+
+/// The points of `c` for which `inside` holds (the rest out of the camera's view).
+fn seen_where(c: &PointCloud, inside: impl Fn(&Point3<f64>) -> bool) -> PointCloud {
+    PointCloud::new(c.points.iter().filter(|p| inside(p)).copied().collect())
+}
+
+#[test]
+fn a_bed_cut_lengthwise_by_the_image_edge_is_not_taken_for_a_sofa() {
+    // A 0.9 m single bed along x of which the camera sees 0.6 m across (y below 0.15 m),
+    // the floor in front of it: narrower in view than a bed (0.70 m at 1.75 m), but the
+    // scan ends unseen beside it, so its width is unknown, not too small. A three-seat
+    // sofa cut the same way (its front out of view, its back seen) gives no place to lie.
+    let bed = bed(&BedParams {
+        width: 0.9,
+        headboard_height: 0.0,
+        ..BedParams::default()
+    });
+    let sofa = sofa(&SofaParams {
+        seats: 3,
+        ..SofaParams::default()
+    });
+    for height in [1.65, 1.85] {
+        let (agent, h) = lying(height);
+        let cut = |m: &Mesh, inside: fn(&Point3<f64>) -> bool| {
+            let c = seen_where(&cloud(m), inside);
+            affords(&detect(&c, &agent, &h, &DetectConfig::default()))
+        };
+        // The bed along x, seen up to y = 0.15 m; the sofa's seat along y, its front
+        // (x from 0 to 0.28 m) out of view.
+        assert_eq!(
+            cut(&bed, |p| p.y < 0.15),
+            ["lying", "elongated_body", "stretched_legs"],
+            "at {height} m"
+        );
+        assert!(cut(&sofa, |p| p.x < 0.0).is_empty(), "at {height} m");
+    }
 }
 
 #[test]

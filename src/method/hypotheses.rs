@@ -118,8 +118,25 @@ fn hypotheses_in_pieces(
                 let rise = sr.rise.unwrap_or(sr.tolerance);
                 (sr, surface(map, ix, iy, disc, mean, sr.tolerance, rise))
             });
+            // Too narrow where seen edges bound it. A long strip running on unseen out of
+            // the scan across its axis (a bed cut lengthwise by the image edge) is of
+            // unknown width, not too narrow; its axis is known where it is elongated and
+            // at least as long as the surface's reach (half a body).
             if let Some((sr, shape)) = &shape {
-                if shape.width < sr.min_width * body_height {
+                let reach = sr.radius * body_height;
+                let too_narrow = shape.width < sr.min_width * body_height
+                    && !(shape.length >= reach
+                        && shape.along(sr.elongation).is_some()
+                        && open_across(
+                            map,
+                            (ix, iy),
+                            shape.axis,
+                            reach / 2.0,
+                            mean,
+                            sr.tolerance,
+                            sr.rise.unwrap_or(sr.tolerance),
+                        ));
+                if too_narrow {
                     continue;
                 }
             }
@@ -592,6 +609,68 @@ pub fn surface(
         tolerance,
         None,
     )
+}
+
+/// Whether the surface at `level` (metres) through cell `(ix, iy)` may reach further
+/// across its long axis `axis` (radians about z, as [`SurfaceShape::axis`]) than the scan
+/// shows, on one side. On the lines at right angles to `axis` from the cell and from the
+/// points `reach` metres either way along the axis (all three inside `map`, or it is
+/// not), every cell past the last one at the surface's level (within `-tolerance..=rise`
+/// of it, as [`surface`] crosses) is unseen up to the map's edge: the cloud ends there
+/// unseen (the image edge of a depth view cutting a bed lengthwise), so the surface's
+/// width is unknown rather than too small. A drop or a rise seen anywhere past it on any
+/// line bounds that side (the floor seen past the shadow of a bench's far edge, a wall);
+/// so does a rise seen on the other side (a sofa's or a bench's back: a narrow seat in
+/// front of a back is taken for what it shows). The three lines keep a seat cut across
+/// by the image edge near the cell, where a single slanted line runs out along the cut.
+pub fn open_across(
+    map: &HeightMap,
+    (ix, iy): (usize, usize),
+    axis: f64,
+    reach: f64,
+    level: f64,
+    tolerance: f64,
+    rise: f64,
+) -> bool {
+    let crossed = |h: f64| (-tolerance..=rise.max(tolerance)).contains(&(h - level));
+    let inside =
+        |x: isize, y: isize| x >= 0 && y >= 0 && (x as usize) < map.nx && (y as usize) < map.ny;
+    let (ax, ay) = (axis.cos(), axis.sin());
+    let (ux, uy) = (-ay, ax);
+    let along = reach / map.cell;
+    let starts = [0.0, -along, along].map(|s| (ix as f64 + s * ax, iy as f64 + s * ay));
+    if !starts
+        .iter()
+        .all(|&(x, y)| inside(to_isize(x.round()), to_isize(y.round())))
+    {
+        return false;
+    }
+    // The height of the first cell seen off the surface on the line from `(x0, y0)` the
+    // way `way`; `None` where the line runs out of the map first.
+    let bound = |(x0, y0): (f64, f64), way: f64| {
+        (1..)
+            .map(|k| {
+                let t = way * f64::from(k);
+                (
+                    to_isize((x0 + t * ux).round()),
+                    to_isize((y0 + t * uy).round()),
+                )
+            })
+            .find_map(|(x, y)| {
+                if inside(x, y) {
+                    map.get(x, y).filter(|&h| !crossed(h)).map(Some)
+                } else {
+                    Some(None)
+                }
+            })
+            .flatten()
+    };
+    [1.0, -1.0].into_iter().any(|way| {
+        starts.iter().all(|&start| bound(start, way).is_none())
+            && starts
+                .iter()
+                .all(|&start| bound(start, -way).is_none_or(|h| h < level))
+    })
 }
 
 /// [`surface`] (folds up to `rise` above `level` crossed), with the share of its bounding
@@ -1280,16 +1359,62 @@ mod tests {
         assert_eq!(seat_level(&square, 20, 20, &disc).along(1.3), None);
     }
 
+    /// [`rule_`] asking a bed's surface: within half a body, 0.40 H (0.70 m at 1.75 m)
+    /// wide, elongated 1.3 times for a heading.
+    fn bed_rule() -> HypothesisRule {
+        HypothesisRule {
+            surface: Some(crate::model::hierarchy::SurfaceRule {
+                radius: 0.5,
+                tolerance: 0.05,
+                rise: None,
+                min_width: 0.4,
+                elongation: 1.3,
+            }),
+            ..rule_()
+        }
+    }
+
+    #[test]
+    fn a_narrow_strip_running_out_of_the_scan_is_of_unknown_width() {
+        let r = bed_rule();
+        // Strips along x (2 m long) at 0.45 m, 0.65 m wide (13 rows): too narrow for the
+        // 0.70 m asked at 1.75 m where seen edges bound them. Rows by height.
+        let found = |row: fn(usize) -> Option<f64>| {
+            hypotheses(
+                &map_of(40, |_, y| row(y)),
+                &r,
+                Orientation::Orthogonal,
+                1.75,
+            )
+            .len()
+        };
+        // Cut lengthwise by the scan's edge (rows 27-39), the floor seen in front: the
+        // width is unknown, as a bed's cut by the image edge.
+        assert!(found(|y| Some(if y < 27 { 0.0 } else { 0.45 })) > 0);
+        // Rows 21-33, the floor seen past the shadow of its far edge: too narrow.
+        assert_eq!(
+            found(|y| match y {
+                21..=33 => Some(0.45),
+                34..=36 => None,
+                _ => Some(0.0),
+            }),
+            0
+        );
+        // Cut by the scan's edge with a back rising before it (rows 21-26, a sofa's seat
+        // with its front cut off): too narrow.
+        assert_eq!(
+            found(|y| Some(match y {
+                27.. => 0.45,
+                21.. => 0.85,
+                _ => 0.0,
+            })),
+            0
+        );
+    }
+
     #[test]
     fn a_surface_narrower_than_the_rule_gives_no_hypothesis() {
-        let mut r = rule_();
-        r.surface = Some(crate::model::hierarchy::SurfaceRule {
-            radius: 0.5,
-            tolerance: 0.05,
-            rise: None,
-            min_width: 0.4,
-            elongation: 1.3,
-        });
+        let r = bed_rule();
         // Body height 1.75: 0.70 m asked; a 0.95 m strip passes, a 0.65 m one does not.
         let wide = hypotheses(
             &strip(19.0, 0.0, |_, _| false),
