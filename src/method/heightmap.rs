@@ -519,9 +519,14 @@ impl HeightMap {
         self.heights.iter().flatten().copied()
     }
 
+    /// Whether cell `(ix, iy)` lies within the map's `nx` x `ny` cells (valid or not).
+    pub fn contains(&self, ix: isize, iy: isize) -> bool {
+        ix >= 0 && iy >= 0 && (ix as usize) < self.nx && (iy as usize) < self.ny
+    }
+
     /// Height of cell `(ix, iy)`; `None` if invalid or outside the map.
     pub fn get(&self, ix: isize, iy: isize) -> Option<f64> {
-        if ix < 0 || iy < 0 || ix as usize >= self.nx || iy as usize >= self.ny {
+        if !self.contains(ix, iy) {
             return None;
         }
         let (ix, iy) = (ix as usize, iy as usize);

@@ -62,9 +62,11 @@ fn hypotheses_in_pieces(
 ) -> Vec<Hypothesis> {
     let template = map.disc(rule_.template_diameter * body_height / 2.0);
     let neighbourhood = map.disc(rule_.gradient_radius * body_height);
-    let surface_rule = rule_
-        .surface
-        .map(|sr| (sr, map.disc(sr.radius * body_height)));
+    // The surface rule, the folds it crosses (metres above its level) and its disc.
+    let surface_rule = rule_.surface.map(|sr| {
+        let rise = sr.rise.unwrap_or(sr.tolerance);
+        (sr, rise, map.disc(sr.radius * body_height))
+    });
     let height = rule_.height.map(|t| t.scaled(body_height));
     let perch = rule_.perch.map(|p| Perch::new(&p, map, body_height));
     let facing_tolerance = rule_.facing_tolerance.unwrap_or(0.0);
@@ -114,15 +116,18 @@ fn hypotheses_in_pieces(
                 continue;
             }
             // The surface reaches further than the band's rows: read from the map.
-            let shape = surface_rule.as_ref().map(|(sr, disc)| {
-                let rise = sr.rise.unwrap_or(sr.tolerance);
-                (sr, surface(map, ix, iy, disc, mean, sr.tolerance, rise))
+            let shape = surface_rule.as_ref().map(|(sr, rise, disc)| {
+                (
+                    sr,
+                    *rise,
+                    surface(map, ix, iy, disc, mean, sr.tolerance, *rise),
+                )
             });
             // Too narrow where seen edges bound it. A long strip running on unseen out of
             // the scan across its axis (a bed cut lengthwise by the image edge) is of
             // unknown width, not too narrow; its axis is known where it is elongated and
             // at least as long as the surface's reach (half a body).
-            if let Some((sr, shape)) = &shape {
+            if let Some((sr, rise, shape)) = &shape {
                 let reach = sr.radius * body_height;
                 let too_narrow = shape.width < sr.min_width * body_height
                     && !(shape.length >= reach
@@ -134,7 +139,7 @@ fn hypotheses_in_pieces(
                             reach / 2.0,
                             mean,
                             sr.tolerance,
-                            sr.rise.unwrap_or(sr.tolerance),
+                            *rise,
                         ));
                 if too_narrow {
                     continue;
@@ -145,7 +150,7 @@ fn hypotheses_in_pieces(
             let across =
                 descent(&*band, ix, iy, &neighbourhood, rule_.flat_gradient).or_else(|| {
                     shape
-                        .and_then(|(sr, shape)| shape.along(sr.elongation))
+                        .and_then(|(sr, _, shape)| shape.along(sr.elongation))
                         .map(|along| along + std::f64::consts::FRAC_PI_2)
                 });
             let facing =
@@ -611,6 +616,12 @@ pub fn surface(
     )
 }
 
+/// Whether height `h` lies on a surface at `level` (metres): within `tolerance` below it,
+/// or up to `rise` (at least `tolerance`) above it, a fold lying on it.
+fn on_level(h: f64, level: f64, tolerance: f64, rise: f64) -> bool {
+    (-tolerance..=rise.max(tolerance)).contains(&(h - level))
+}
+
 /// Whether the surface at `level` (metres) through cell `(ix, iy)` may reach further
 /// across its long axis `axis` (radians about z, as [`SurfaceShape::axis`]) than the scan
 /// shows, on one side. On the lines at right angles to `axis` from the cell and from the
@@ -632,16 +643,14 @@ pub fn open_across(
     tolerance: f64,
     rise: f64,
 ) -> bool {
-    let crossed = |h: f64| (-tolerance..=rise.max(tolerance)).contains(&(h - level));
-    let inside =
-        |x: isize, y: isize| x >= 0 && y >= 0 && (x as usize) < map.nx && (y as usize) < map.ny;
+    let crossed = |h: f64| on_level(h, level, tolerance, rise);
     let (ax, ay) = (axis.cos(), axis.sin());
     let (ux, uy) = (-ay, ax);
     let along = reach / map.cell;
     let starts = [0.0, -along, along].map(|s| (ix as f64 + s * ax, iy as f64 + s * ay));
     if !starts
         .iter()
-        .all(|&(x, y)| inside(to_isize(x.round()), to_isize(y.round())))
+        .all(|&(x, y)| map.contains(to_isize(x.round()), to_isize(y.round())))
     {
         return false;
     }
@@ -657,7 +666,7 @@ pub fn open_across(
                 )
             })
             .find_map(|(x, y)| {
-                if inside(x, y) {
+                if map.contains(x, y) {
                     map.get(x, y).filter(|&h| !crossed(h)).map(Some)
                 } else {
                     Some(None)
@@ -692,7 +701,7 @@ fn rimmed_surface(
     let at = |dx: isize, dy: isize| map.height(ix as isize + dx, iy as isize + dy);
     // Cells within `tolerance` of the level, or up to `rise` above it (a fold lying on
     // the surface): the others bound it.
-    let crossed = |h: f64| (-tolerance..=rise.max(tolerance)).contains(&(h - level));
+    let crossed = |h: f64| on_level(h, level, tolerance, rise);
     let raised = |h: f64| h - level > tolerance && crossed(h);
     if !at(0, 0).is_some_and(|h| (h - level).abs() <= tolerance) {
         return SurfaceShape::default();
