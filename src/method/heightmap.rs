@@ -10,7 +10,7 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::cloud::{point_spacing, PointCloud, TileSpacing};
-use crate::num::{index32, to_isize, to_usize};
+use crate::num::{index32, to_f32, to_isize, to_usize};
 use nalgebra::Point3;
 use rayon::prelude::*;
 
@@ -128,6 +128,10 @@ pub struct HeightMap {
     /// Surface height per cell of the stored tiles, `TILE * TILE` per tile, row-major
     /// within a tile; `None` where the cell is invalid.
     heights: Vec<Option<f64>>,
+    /// Per cell of the stored tiles (as `heights`), how far its stack reaches below its
+    /// top, metres: the side face of a seat seen under its edge, or the floor under an
+    /// open one; 0 where the cell is invalid or was filled without points.
+    depths: Vec<f32>,
 }
 
 /// Read access to the cells of a height map: the map itself, or a copy of some of its
@@ -203,6 +207,7 @@ impl HeightMap {
             tiles: vec![NO_TILE; tiles_x * ny.div_ceil(TILE)],
             tiles_x,
             heights: Vec::new(),
+            depths: Vec::new(),
         }
     }
 
@@ -217,6 +222,7 @@ impl HeightMap {
             }
         }
         self.heights = vec![None; n * TILE * TILE];
+        self.depths = vec![0.0; n * TILE * TILE];
     }
 
     /// The tile of cell `(ix, iy)` (inside the map).
@@ -407,21 +413,29 @@ impl HeightMap {
         let cells_per_tile = TILE * TILE;
         let mut jobs = Vec::with_capacity(map.heights.len() / cells_per_tile);
         let mut rest: &mut [f64] = &mut zs;
-        for (t, hs) in map.heights.chunks_mut(cells_per_tile).enumerate() {
+        for (t, (hs, ds)) in map
+            .heights
+            .chunks_mut(cells_per_tile)
+            .zip(map.depths.chunks_mut(cells_per_tile))
+            .enumerate()
+        {
             let (from, to) = (
                 start[t * cells_per_tile],
                 start[t * cells_per_tile + hs.len()],
             );
             let (mine, after) = std::mem::take(&mut rest).split_at_mut(to - from);
             rest = after;
-            jobs.push((t * cells_per_tile, hs, mine));
+            jobs.push((t * cells_per_tile, hs, ds, mine));
         }
-        jobs.into_par_iter().for_each(|(c0, hs, column_zs)| {
+        jobs.into_par_iter().for_each(|(c0, hs, ds, column_zs)| {
             let base = start[c0];
-            for (k, h) in hs.iter_mut().enumerate() {
+            for (k, (h, d)) in hs.iter_mut().zip(ds.iter_mut()).enumerate() {
                 let c = c0 + k;
                 let column = &mut column_zs[start[c] - base..start[c + 1] - base];
-                *h = column_top(column, cfg);
+                if let Some((top, bottom)) = column_top(column, cfg) {
+                    *h = Some(top);
+                    *d = to_f32(top - bottom);
+                }
             }
         });
         map
@@ -489,9 +503,11 @@ impl HeightMap {
         if self.tiles[t] == NO_TILE {
             self.tiles[t] = self.heights.len() / (TILE * TILE);
             self.heights.resize(self.heights.len() + TILE * TILE, None);
+            self.depths.resize(self.heights.len(), 0.0);
         }
         let i = self.index(ix, iy);
         self.heights[i] = Some(height);
+        self.depths[i] = 0.0;
     }
 
     /// The cells `(ix, iy)` whose height is at least `min` metres, tile by tile (tiles in
@@ -535,6 +551,17 @@ impl HeightMap {
             return None;
         }
         self.heights[slot * TILE * TILE + in_tile(ix, iy)]
+    }
+
+    /// How far the stack of cell `(ix, iy)` reaches below its top, metres: from its top
+    /// to the lowest point seen in its column (a seat's side face seen under its edge, or
+    /// the floor seen under an open seat; a mattress cut by the image edge shows nothing
+    /// below its top at the cut). `None` if the cell is invalid or outside the map, 0 for
+    /// a cell filled without points of its own.
+    pub fn depth(&self, ix: isize, iy: isize) -> Option<f64> {
+        self.get(ix, iy)?;
+        let (ix, iy) = (ix as usize, iy as usize);
+        Some(f64::from(self.depths[self.index(ix, iy)]))
     }
 
     /// World (x, y) of the centre of cell `(ix, iy)`, metres.
@@ -634,13 +661,14 @@ fn reaches(
     out
 }
 
-/// [`stack_top`] of the heights `column` in any order. A column whose heights span less
+/// [`stack_top`] of the heights `column` in any order, with the lowest height (the
+/// stack's bottom): `(top, bottom)`. A column whose heights span less
 /// than both gaps (every seat-only or floor-only column) has no gap between sorted
 /// neighbours that reaches either (each is at most the span, and the rounded difference
 /// of two heights is monotone in them), so its stack is the whole column: its top is the
 /// highest height (by `total_cmp`, the last one sorting gives) without sorting. Other
 /// columns are sorted (`total_cmp`) and walked.
-fn column_top(column: &mut [f64], cfg: &HeightMapConfig) -> Option<f64> {
+fn column_top(column: &mut [f64], cfg: &HeightMapConfig) -> Option<(f64, f64)> {
     let (&first, rest) = column.split_first()?;
     let (mut lo, mut hi) = (first, first);
     for &z in rest {
@@ -654,10 +682,10 @@ fn column_top(column: &mut [f64], cfg: &HeightMapConfig) -> Option<f64> {
     let span = hi - lo;
     if span < cfg.overhang_gap && span < cfg.thigh_gap {
         // `stack_top`'s test of the lowest height (the gaps are not NaN here).
-        return (lo < cfg.overhang_gap).then_some(hi);
+        return (lo < cfg.overhang_gap).then_some((hi, lo));
     }
     column.sort_unstable_by(f64::total_cmp);
-    stack_top(column, cfg)
+    stack_top(column, cfg).map(|top| (top, column[0]))
 }
 
 /// The top of the lowest stack of the sorted heights `column` standing on the floor
@@ -922,7 +950,7 @@ mod tests {
             .collect()
     }
 
-    /// `column_top` against sorting and `stack_top`, bit for bit, on seeded columns: short
+    /// `column_top` against sorting and `stack_top` (and the lowest height), bit for bit, on seeded columns: short
     /// and long, spans round both gaps, a seat over the floor, signed zeros, and gaps set
     /// so that a column's span equals one exactly.
     #[test]
@@ -956,9 +984,10 @@ mod tests {
             reference.sort_unstable_by(f64::total_cmp);
             let want = stack_top(&reference, &cfg);
             let got = column_top(&mut column, &cfg);
+            // The bottom is the lowest height, as sorting puts it first.
             assert_eq!(
-                got.map(f64::to_bits),
-                want.map(f64::to_bits),
+                got.map(|(top, bottom)| (top.to_bits(), bottom.to_bits())),
+                want.map(|top| (top.to_bits(), reference[0].to_bits())),
                 "{reference:?}"
             );
             let span = reference[n - 1] - reference[0];

@@ -137,9 +137,8 @@ fn hypotheses_in_pieces(
                             (ix, iy),
                             shape.axis,
                             reach / 2.0,
-                            mean,
-                            sr.tolerance,
-                            *rise,
+                            (mean, sr.tolerance, *rise),
+                            sr.face,
                         ));
                 if too_narrow {
                     continue;
@@ -634,14 +633,18 @@ fn on_level(h: f64, level: f64, tolerance: f64, rise: f64) -> bool {
 /// so does a rise seen on the other side (a sofa's or a bench's back: a narrow seat in
 /// front of a back is taken for what it shows). The three lines keep a seat cut across
 /// by the image edge near the cell, where a single slanted line runs out along the cut.
+/// With `face` (metres), a line's last cell at the level whose stack reaches `face` or
+/// more below the level ([`HeightMap::depth`]) bounds it too: the side face of a seat's
+/// front, or the floor under an open seat, is seen there, with the floor in front of it
+/// out of view (below a camera looking down); a mattress cut by the image edge shows only
+/// its top at the cut.
 pub fn open_across(
     map: &HeightMap,
     (ix, iy): (usize, usize),
     axis: f64,
     reach: f64,
-    level: f64,
-    tolerance: f64,
-    rise: f64,
+    (level, tolerance, rise): (f64, f64, f64),
+    face: Option<f64>,
 ) -> bool {
     let crossed = |h: f64| on_level(h, level, tolerance, rise);
     let (ax, ay) = (axis.cos(), axis.sin());
@@ -655,24 +658,33 @@ pub fn open_across(
         return false;
     }
     // The height of the first cell seen off the surface on the line from `(x0, y0)` the
-    // way `way`; `None` where the line runs out of the map first.
+    // way `way`; `None` where the line runs out of the map first. Points seen `face` or
+    // more below the level in the last surface cell before the map's edge end the surface
+    // there as a drop would: the height given is that cell's bottom.
     let bound = |(x0, y0): (f64, f64), way: f64| {
-        (1..)
-            .map(|k| {
-                let t = way * f64::from(k);
-                (
-                    to_isize((x0 + t * ux).round()),
-                    to_isize((y0 + t * uy).round()),
-                )
-            })
-            .find_map(|(x, y)| {
-                if map.contains(x, y) {
-                    map.get(x, y).filter(|&h| !crossed(h)).map(Some)
-                } else {
-                    Some(None)
-                }
-            })
-            .flatten()
+        let start = (to_isize(x0.round()), to_isize(y0.round()));
+        let mut last = map
+            .get(start.0, start.1)
+            .filter(|&h| crossed(h))
+            .map(|_| start);
+        for k in 1.. {
+            let t = way * f64::from(k);
+            let (x, y) = (
+                to_isize((x0 + t * ux).round()),
+                to_isize((y0 + t * uy).round()),
+            );
+            if !map.contains(x, y) {
+                break;
+            }
+            match map.get(x, y) {
+                Some(h) if !crossed(h) => return Some(h),
+                Some(_) => last = Some((x, y)),
+                None => {}
+            }
+        }
+        let (x, y) = last?;
+        let (h, d) = (map.get(x, y)?, map.depth(x, y)?);
+        face.is_some_and(|f| level - (h - d) >= f).then_some(h - d)
     };
     [1.0, -1.0].into_iter().any(|way| {
         starts.iter().all(|&start| bound(start, way).is_none())
@@ -1378,6 +1390,7 @@ mod tests {
                 rise: None,
                 min_width: 0.4,
                 elongation: 1.3,
+                face: None,
             }),
             ..rule_()
         }
@@ -1418,6 +1431,56 @@ mod tests {
                 _ => 0.0,
             })),
             0
+        );
+    }
+
+    /// A seat cut lengthwise by the image edge shows its top only at the cut; one whose
+    /// front edge is seen, with the floor in front of it out of view, shows its front face
+    /// going down under its last cells, and ends there.
+    #[test]
+    fn a_face_seen_under_the_last_cells_ends_the_surface() {
+        use crate::cloud::PointCloud;
+        use crate::method::heightmap::HeightMapConfig;
+        // Four points per 5 cm cell along x and y (2 m x 2 m, 40 x 40 cells from a point
+        // at the origin): rows 0-26 floor, rows 27-39 a 0.65 m strip at 0.45 m running to
+        // the cloud's edge; with `face`, the strip's last row also shows a side face down
+        // to 0.20 m, sampled every 2.5 cm.
+        let cloud = |face: bool| {
+            let mut pts = vec![Point3::origin()];
+            for i in 0..160 {
+                for j in 0..160 {
+                    let (x, y) = (0.00625 + 0.0125 * i as f64, 0.00625 + 0.0125 * j as f64);
+                    let z = if j < 27 * 4 { 0.0 } else { 0.45 };
+                    pts.push(Point3::new(x, y, z));
+                    if face && j >= 39 * 4 {
+                        pts.extend((1..=10).map(|k| Point3::new(x, y, 0.45 - 0.025 * k as f64)));
+                    }
+                }
+            }
+            HeightMap::from_cloud(&PointCloud::new(pts), &HeightMapConfig::default())
+        };
+        let rule = |face: Option<f64>| {
+            let mut r = bed_rule();
+            if let Some(sr) = r.surface.as_mut() {
+                sr.face = face;
+            }
+            r
+        };
+        let found = |map: &HeightMap, r: &HypothesisRule| {
+            hypotheses(map, r, Orientation::Orthogonal, 1.75).len()
+        };
+        let (top_only, faced) = (cloud(false), cloud(true));
+        assert_eq!(top_only.depth(20, 39), Some(0.0));
+        assert!((faced.depth(20, 39).unwrap() - 0.25).abs() < 1e-6);
+        assert!(
+            found(&top_only, &rule(Some(0.2))) > 0,
+            "cut by the image edge"
+        );
+        assert_eq!(found(&faced, &rule(Some(0.2))), 0, "its front seen");
+        assert!(found(&faced, &rule(None)) > 0, "no face asked");
+        assert!(
+            found(&faced, &rule(Some(0.3))) > 0,
+            "a face shallower than asked"
         );
     }
 

@@ -138,6 +138,12 @@ pub struct SurfaceRule {
     /// Least ratio of the surface's spread along its long axis to its spread across
     /// (standard deviations) for the axis to give a heading where the gradient is flat.
     pub elongation: f64,
+    /// Where the scan runs on unseen across the surface, how far below its level (metres)
+    /// something seen in the column of its last cell ends it there (a seat's front face,
+    /// the floor under an open seat); a mattress cut by the image edge shows only its top.
+    /// `None`: nothing ends it.
+    #[serde(default)]
+    pub face: Option<f64>,
 }
 
 /// Parameters of the initial agent fitting (section 4.2).
@@ -1034,6 +1040,11 @@ fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
                 return Err(src.invalid(&surface.key("rise"), NonNegative.what(v)));
             }
         }
+        if let Some(v) = a.face {
+            if !Positive.holds(v) {
+                return Err(src.invalid(&surface.key("face"), Positive.what(v)));
+            }
+        }
         if !(a.elongation.is_finite() && a.elongation >= 1.0) {
             return Err(src.invalid(
                 &surface.key("elongation"),
@@ -1844,7 +1855,7 @@ mod tests {
     #[test]
     fn a_bad_surface_rule_is_named() {
         let rule =
-            "surface = { radius = 0.5, tolerance = 0.05, rise = 0.10, min_width = 0.40, elongation = 1.3 }";
+            "surface = { radius = 0.5, tolerance = 0.05, rise = 0.10, min_width = 0.40, elongation = 1.3, face = 0.20 }";
         let lying = crate::model::set::BUILTIN_LYING;
         assert_eq!(lying.matches(rule).count(), 1);
         assert!(load(lying).unwrap().hypothesis.surface.is_some());
@@ -1868,6 +1879,11 @@ mod tests {
                 rule.replace("rise = 0.10", "rise = -0.1"),
                 "rise",
                 "not be negative",
+            ),
+            (
+                rule.replace("face = 0.20", "face = 0.0"),
+                "face",
+                "positive",
             ),
         ] {
             let bad = lying.replace(rule, &to);
