@@ -329,10 +329,11 @@ impl NodeContext<'_> {
     /// `rear`: whether every part of `parts` that touches the scene stands at the rear of
     /// the seat: from the root joint (the placement's position), along the horizontal part
     /// of the contact's normal ([`Scene::contact_normal`], pointing away from what was
-    /// touched), the scene stops holding a surface within the rule's `gap` below the root
-    /// joint before the rule's `reach` (fraction of H), stepping over space the scan did
-    /// not see ([`Scene::seat_ends`]). A contact whose normal is nearly vertical has no
-    /// such direction and passes. True when the node has no `rear` rule.
+    /// touched) and along the directions the rule's `fan` either side of it, the scene
+    /// stops holding a surface within the rule's `gap` below the root joint before the
+    /// rule's `reach` (fraction of H), stepping over space the scan did not see
+    /// ([`Scene::seat_ends`]). A contact whose normal is nearly vertical has no such
+    /// direction and passes. True when the node has no `rear` rule.
     pub fn rear(&self, parts: &[Cylinder]) -> bool {
         let Some(rule) = self.node.rear else {
             return true;
@@ -347,8 +348,13 @@ impl NodeContext<'_> {
             if flat.norm() < REAR_MIN_HORIZONTAL {
                 return true;
             }
-            self.scene
-                .seat_ends(&self.place.position, &flat.normalize(), reach, rule.gap)
+            let f = flat.normalize();
+            [0.0, rule.fan, -rule.fan].iter().all(|&a| {
+                let (s, c) = a.sin_cos();
+                let dir = Vector3::new(c * f.x - s * f.y, s * f.x + c * f.y, 0.0);
+                self.scene
+                    .seat_ends(&self.place.position, &dir, reach, rule.gap)
+            })
         })
     }
 
@@ -1261,6 +1267,36 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         assert!(with(&a, &h, &chair, &p, &node).beyond(&[trunk]));
     }
 
+    /// A body turned at a bed's head-end corner: straight out from the back the seat ends
+    /// (the bed's side), but 30 degrees to one side the mattress goes on along the bed.
+    #[test]
+    fn rear_looks_across_the_width_of_the_thighs() {
+        use crate::model::hierarchy::Rear;
+        let (a, h) = models();
+        // The chair's seat (0.45 m deep), and a strip of mattress going on from its front
+        // edge along x at y = 0.10-0.30 m.
+        let mut pts = seat_and_back(45, false);
+        for i in 46..=200 {
+            for j in 10..=30 {
+                pts.push(Point3::new(i as f64 * 0.01, j as f64 * 0.01, 0.45));
+            }
+        }
+        let corner = Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene);
+        let p = seated(0.15);
+        let (trunk, _) = trunk_at_the_back();
+        assert!(corner.touches(&trunk));
+        let mut node = h.nodes[0].clone();
+        let rear = |fan: f64| Rear {
+            reach: 0.45,
+            gap: 0.2,
+            fan: fan.to_radians(),
+        };
+        node.rear = Some(rear(0.0));
+        assert!(with(&a, &h, &corner, &p, &node).rear(&[trunk]));
+        node.rear = Some(rear(30.0));
+        assert!(!with(&a, &h, &corner, &p, &node).rear(&[trunk]));
+    }
+
     #[test]
     fn rear_accepts_a_chair_back_and_refuses_a_headboard() {
         use crate::model::hierarchy::Rear;
@@ -1281,6 +1317,7 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         node.rear = Some(Rear {
             reach: 0.45,
             gap: 0.2,
+            fan: 0.0,
         });
         assert!(with(&a, &h, &chair, &p, &node).rear(&[trunk]));
         assert!(!with(&a, &h, &bed, &p, &node).rear(&[trunk]));

@@ -336,6 +336,9 @@ pub struct Rear {
     pub reach: f64,
     /// Metres below the root joint within which the scene counts as the seat going on.
     pub gap: f64,
+    /// Radians either side of the contact's normal along which the seat must end too: a
+    /// seat ends in front of its back across the thighs' width, not along one line.
+    pub fan: f64,
 }
 
 /// A node's `beyond` rule: a contact counts only if, walking on from where the part comes
@@ -579,6 +582,8 @@ struct BeyondFile {
 struct RearFile {
     reach: f64,
     gap: f64,
+    #[serde(default)]
+    fan: f64,
 }
 
 #[derive(Deserialize)]
@@ -1231,7 +1236,20 @@ fn resolve_node(
     let rear = n
         .rear
         .as_ref()
-        .map(|r| walk("rear", r.reach, r.gap).map(|(reach, gap)| Rear { reach, gap }))
+        .map(|r| {
+            let (reach, gap) = walk("rear", r.reach, r.gap)?;
+            if !(r.fan.is_finite() && (0.0..90.0).contains(&r.fan)) {
+                return Err(src.invalid(
+                    &key.key("rear").key("fan"),
+                    format!("must be 0 to under 90 degrees, not {}", r.fan),
+                ));
+            }
+            Ok(Rear {
+                reach,
+                gap,
+                fan: r.fan.to_radians(),
+            })
+        })
         .transpose()?;
     let beyond = n
         .beyond
@@ -2015,15 +2033,20 @@ mod tests {
 
     #[test]
     fn a_bad_rear_rule_is_named() {
-        let rule = "rear = { reach = 0.45, gap = 0.20 }";
+        let rule = "rear = { reach = 0.45, gap = 0.20, fan = 30.0 }";
         assert_eq!(BUILTIN_SITTING.matches(rule).count(), 1);
         let backrest = &load(BUILTIN_SITTING).unwrap().nodes[2];
         assert_eq!(backrest.id, "backrest");
-        assert_eq!(backrest.rear.map(|r| (r.reach, r.gap)), Some((0.45, 0.2)));
-        let (e, line) = edited(rule, "rear = { reach = 1.5, gap = 0.20 }");
+        assert_eq!(
+            backrest.rear.map(|r| (r.reach, r.gap, r.fan)),
+            Some((0.45, 0.2, 30f64.to_radians()))
+        );
+        let (e, line) = edited(rule, "rear = { reach = 1.5, gap = 0.20, fan = 30.0 }");
         names(&e, line, "node.backrest.rear.reach", "at most 1");
-        let (e, line) = edited(rule, "rear = { reach = 0.45, gap = -0.1 }");
+        let (e, line) = edited(rule, "rear = { reach = 0.45, gap = -0.1, fan = 30.0 }");
         names(&e, line, "node.backrest.rear.gap", "under 1 metre");
+        let (e, line) = edited(rule, "rear = { reach = 0.45, gap = 0.20, fan = 90.0 }");
+        names(&e, line, "node.backrest.rear.fan", "under 90 degrees");
     }
 
     #[test]
