@@ -591,16 +591,22 @@ impl Scene {
     /// `level` ([`Self::top_at_most`]: a wall's foot seen under the shadow a chair's back
     /// casts on it is no seat). A stretch shorter than `length` (the seat seen through the
     /// gaps of a slatted back) ends where something stands up again, and the walk goes
-    /// on. False when the walk meets nothing above `level`, or reaches `limit`.
+    /// on. False when the walk meets nothing above `level`, or reaches `limit`. `level` is
+    /// the seat's level `seat` raised by `rise` (metres): a mattress beyond a pillow that a
+    /// duvet's lumps lift a little above the pelvis of a body sunk into it is at it; the
+    /// band below reaches `gap` under `seat`.
     pub fn goes_on_beyond(
         &self,
         from: &Point3<f64>,
         dir: &Vector3<f64>,
         limit: f64,
-        (level, gap): (f64, f64),
+        (seat, gap, rise): (f64, f64, f64),
         length: f64,
     ) -> bool {
-        let bottom = level - gap;
+        let bottom = seat - gap;
+        // A surface up to `rise` above the seat's level is at it: a duvet's lumps round a
+        // body sunk into a mattress.
+        let level = seat + rise;
         let mut over = false;
         // Whether the walk has stepped over a shadow since it was over something.
         let mut shadowed = false;
@@ -2365,10 +2371,22 @@ mod tests {
         // From the forearm's top over the pillow, level with the pelvis at 0.6 m.
         let from = Point3::new(0.4, 0.2, 0.7);
         let along = Vector3::x();
-        let goes_on = |s: &Scene| s.goes_on_beyond(&from, &along, 0.8, (0.6, 0.2), 0.1);
+        let goes_on = |s: &Scene| s.goes_on_beyond(&from, &along, 0.8, (0.6, 0.2, 0.0), 0.1);
         assert!(goes_on(&mattress), "the mattress is seen beyond the shadow");
         assert!(!goes_on(&floor), "the floor is seen beyond it");
         assert!(!goes_on(&wall), "a wall's foot is no seat");
+        // A taller pillow (top 0.75 m) and the mattress beyond it lifted 3 cm above the
+        // pelvis by a duvet's lump (its voxels' tops 4 cm): at the seat's level only where a rise is allowed.
+        let lumpy = scene_of(|p| {
+            strip(0.0..0.3, 0.5, p);
+            strip(0.3..0.5, 0.75, p);
+            upright(0.3, 0.5..0.75, p);
+            strip(0.8..2.0, 0.63, p);
+        });
+        let from = Point3::new(0.4, 0.2, 0.8);
+        let lumps = |rise: f64| lumpy.goes_on_beyond(&from, &along, 0.8, (0.6, 0.2, rise), 0.1);
+        assert!(!lumps(0.0), "above the pelvis, without a rise");
+        assert!(lumps(0.06), "within a rise of 6 cm");
     }
 
     fn vertical(x: f64, y: f64, bottom: f64, top: f64, r: f64) -> Cylinder {

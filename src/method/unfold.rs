@@ -382,9 +382,13 @@ impl NodeContext<'_> {
                 self.outwards(&near)
             };
             let from = Point3::new(near.x, near.y, near.z + p.radius);
-            !self
-                .scene
-                .goes_on_beyond(&from, &dir, reach, (level, rule.gap), rule.length)
+            !self.scene.goes_on_beyond(
+                &from,
+                &dir,
+                reach,
+                (level, rule.gap, rule.rise),
+                rule.length,
+            )
         })
     }
 
@@ -1255,6 +1259,7 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
                 reach: 0.45,
                 gap: 0.2,
                 length,
+                rise: 0.0,
             })
         };
         node.beyond = rule(0.10);

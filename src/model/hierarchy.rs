@@ -359,6 +359,9 @@ pub struct Beyond {
     pub gap: f64,
     /// Metres the seat must go on beyond what was touched, at least.
     pub length: f64,
+    /// Metres above the root joint up to which a surface still counts as the seat going
+    /// on (a duvet's lumps lift a mattress round a body sunk into it).
+    pub rise: f64,
 }
 
 /// A node's `beside` rule: a contact counts only if, over the body's midplane along the
@@ -575,6 +578,8 @@ struct BeyondFile {
     reach: f64,
     gap: f64,
     length: f64,
+    #[serde(default)]
+    rise: f64,
 }
 
 #[derive(Deserialize)]
@@ -1257,7 +1262,13 @@ fn resolve_node(
         .map(|r| {
             let (reach, gap) = walk("beyond", r.reach, r.gap)?;
             let length = gap_under_a_metre(src, &key.key("beyond").key("length"), r.length)?;
-            Ok::<_, ModelError>(Beyond { reach, gap, length })
+            let rise = gap_under_a_metre(src, &key.key("beyond").key("rise"), r.rise)?;
+            Ok::<_, ModelError>(Beyond {
+                reach,
+                gap,
+                length,
+                rise,
+            })
         })
         .transpose()?;
     let narrow = n
@@ -1976,18 +1987,20 @@ mod tests {
         for id in ["armrest", "backrest"] {
             let node = sitting.nodes.iter().find(|n| n.id == id).unwrap();
             assert_eq!(
-                node.beyond.map(|b| (b.reach, b.gap, b.length)),
-                Some((0.45, 0.2, 0.1)),
+                node.beyond.map(|b| (b.reach, b.gap, b.length, b.rise)),
+                Some((0.45, 0.2, 0.1, 0.06)),
                 "{id}"
             );
         }
-        let rule = "beyond = { reach = 0.45, gap = 0.20, length = 0.10 }  # length (m): the seat seen through";
+        let rule = "beyond = { reach = 0.45, gap = 0.20, length = 0.10, rise = 0.06 }  # length (m): the seat seen through";
         let (e, line) = edited(rule, &rule.replace("length = 0.10", "length = 1.5"));
         names(&e, line, "node.backrest.beyond.length", "under 1 metre");
         let (e, line) = edited(rule, &rule.replace("reach = 0.45", "reach = 0"));
         names(&e, line, "node.backrest.beyond.reach", "over 0");
         let (e, line) = edited(rule, &rule.replace(", length = 0.10", ""));
         names(&e, line, "node.backrest.beyond", "length");
+        let (e, line) = edited(rule, &rule.replace("rise = 0.06", "rise = -0.06"));
+        names(&e, line, "node.backrest.beyond.rise", "0 or more");
     }
 
     #[test]
