@@ -2376,7 +2376,8 @@ mod tests {
         assert!(!goes_on(&floor), "the floor is seen beyond it");
         assert!(!goes_on(&wall), "a wall's foot is no seat");
         // A taller pillow (top 0.75 m) and the mattress beyond it lifted 3 cm above the
-        // pelvis by a duvet's lump (its voxels' tops 4 cm): at the seat's level only where a rise is allowed.
+        // pelvis by a duvet's lump (its voxels' tops 4 cm): at the seat's level only where
+        // a rise is allowed.
         let lumpy = scene_of(|p| {
             strip(0.0..0.3, 0.5, p);
             strip(0.3..0.5, 0.75, p);
