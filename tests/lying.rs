@@ -281,8 +281,9 @@ fn a_bed_cut_lengthwise_by_the_image_edge_is_not_taken_for_a_sofa() {
 fn a_seat_seen_to_its_front_at_the_image_edge_is_not_a_bed() {
     // An upholstered bench 1.6 m long and 0.45 m deep, its seat a box down to 0.05 m: the
     // camera looks down at its front face (x = 0.225 m) and sees no floor in front of it
-    // (nor under the seat), and the floor behind it. The scan ends beside the seat, but where the front face
-    // is seen going down under the seat's edge the seat ends there: too narrow for a bed.
+    // (nor under the seat), and the floor behind it. The scan ends beside the seat, but
+    // where the front face is seen going down under the seat's edge the seat ends there:
+    // too narrow for a bed.
     // The same bench cut through its seat 0.10 m behind the front (only its top at the
     // cut) is of unknown width, as a bed's cut lengthwise.
     let bench = bench(&BenchParams {

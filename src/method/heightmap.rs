@@ -662,8 +662,8 @@ fn reaches(
 }
 
 /// [`stack_top`] of the heights `column` in any order, with the lowest height (the
-/// stack's bottom): `(top, bottom)`. A column whose heights span less
-/// than both gaps (every seat-only or floor-only column) has no gap between sorted
+/// stack's bottom): `(top, bottom)`. A column whose heights span less than both gaps
+/// (every seat-only or floor-only column) has no gap between sorted
 /// neighbours that reaches either (each is at most the span, and the rounded difference
 /// of two heights is monotone in them), so its stack is the whole column: its top is the
 /// highest height (by `total_cmp`, the last one sorting gives) without sorting. Other
@@ -950,9 +950,9 @@ mod tests {
             .collect()
     }
 
-    /// `column_top` against sorting and `stack_top` (and the lowest height), bit for bit, on seeded columns: short
-    /// and long, spans round both gaps, a seat over the floor, signed zeros, and gaps set
-    /// so that a column's span equals one exactly.
+    /// `column_top` against sorting and `stack_top` (and the lowest height), bit for bit,
+    /// on seeded columns: short and long, spans round both gaps, a seat over the floor,
+    /// signed zeros, and gaps set so that a column's span equals one exactly.
     #[test]
     fn column_tops_without_sorting_are_the_sorted_ones() {
         use rand::{RngExt, SeedableRng};

@@ -15,7 +15,7 @@ use crate::method::scene::Scene;
 use crate::model::agent::{Agent, Cylinder, FkCache, Placement, Posture};
 use crate::model::hierarchy::{Fallback, Hierarchy, Node, Slide, Spread};
 use crate::num::to_usize;
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Point3, Rotation3, Vector3};
 
 /// Least length of the horizontal part of a unit contact normal for the `rear` and
 /// `beyond` rules to read a direction from it: sin 30 degrees; a normal within 30 degrees
@@ -348,10 +348,9 @@ impl NodeContext<'_> {
             if flat.norm() < REAR_MIN_HORIZONTAL {
                 return true;
             }
-            let f = flat.normalize();
+            let ahead = flat.normalize();
             [0.0, rule.fan, -rule.fan].iter().all(|&a| {
-                let (s, c) = a.sin_cos();
-                let dir = Vector3::new(c * f.x - s * f.y, s * f.x + c * f.y, 0.0);
+                let dir = Rotation3::from_axis_angle(&Vector3::z_axis(), a) * ahead;
                 self.scene
                     .seat_ends(&self.place.position, &dir, reach, rule.gap)
             })
