@@ -217,7 +217,8 @@ fn prepare_spaced(cloud: &PointCloud, cfg: &DetectConfig, spacing: Spacing) -> P
 }
 
 /// The best unfolded pose at one hypothesis whose root affordance is present, with the
-/// number of stable fits tried.
+/// number of stable fits tried: the first in the fits' order (section 4.2, below) that
+/// leaves nothing over space the scan never saw, else the first at all.
 pub fn best_at(
     agent: &Agent,
     h: &Hierarchy,
@@ -234,12 +235,22 @@ pub fn best_at(
     let (equal, rest): (Vec<&Fit>, Vec<&Fit>) = fits
         .iter()
         .partition(|f| f.stability >= top - h.fit.stability_band);
-    let best = equal
+    let found = equal
         .into_iter()
         .chain(rest)
         .map(|f| unfold(agent, h, scene, f, &cfg.contact))
-        .find(|u| u.nodes.first().is_some_and(|r| r.found));
-    (best, n)
+        .filter(|u| u.nodes.first().is_some_and(|r| r.found));
+    // A pose that rests on what the scan saw comes before one that leaves a part over
+    // space the scan never saw (`unseen_sweeps`): the first found with nothing left
+    // unseen, else the first found.
+    let mut first_unseen = None;
+    for u in found {
+        if !u.unseen() {
+            return (Some(u), n);
+        }
+        first_unseen.get_or_insert(u);
+    }
+    (first_unseen, n)
 }
 
 /// Runs the whole method on `cloud` for one agent and one hierarchy.

@@ -110,6 +110,18 @@ fn unfolded_at(m: &Mesh, height: f64, x: f64) -> Vec<String> {
 /// [`unfolded_at`] in a cloud.
 fn unfolded_in(c: &PointCloud, height: f64, x: f64) -> Vec<String> {
     let (agent, h) = lying(height);
+    unfolded_with(c, &agent, &h, x, false)
+}
+
+/// [`unfolded_in`] with hierarchy `h`, at a place whose width the scan did or did not show
+/// (`unseen_width`).
+fn unfolded_with(
+    c: &PointCloud,
+    agent: &Agent,
+    h: &Hierarchy,
+    x: f64,
+    unseen_width: bool,
+) -> Vec<String> {
     let cfg = DetectConfig::default();
     let prepared = prepare(c, &cfg);
     let top = 0.5;
@@ -122,13 +134,14 @@ fn unfolded_in(c: &PointCloud, height: f64, x: f64) -> Vec<String> {
         facing: None,
         memberships: [1.0; 3],
         risen: false,
+        unseen_width,
     };
-    let fits = fit(&agent, &h, &prepared.scene, &hyp, &cfg.contact);
+    let fits = fit(agent, h, &prepared.scene, &hyp, &cfg.contact);
     let f = fits
         .iter()
         .find(|f| f.placement.yaw.abs() < 1e-6)
         .expect("a stable fit with the feet towards +x");
-    let u = unfold(&agent, &h, &prepared.scene, f, &cfg.contact);
+    let u = unfold(agent, h, &prepared.scene, f, &cfg.contact);
     h.nodes
         .iter()
         .zip(&u.nodes)
@@ -350,6 +363,37 @@ fn one_end_of_the_body_must_rest_on_a_surface_in_view() {
         assert_eq!(one, lying_flat, "the foot end unseen, {height} m");
         let both = unfolded_in(&seen(&c, -0.45..0.45), height, 0.0);
         assert!(both.is_empty(), "both ends unseen, {height} m: {both:?}");
+    }
+}
+
+#[test]
+fn a_bed_cut_across_at_the_hips_affords_lying_with_the_legs_unseen() {
+    // The head half of a 2 m bed, the camera seeing nothing past x = 0 (the hips of a body
+    // lying with its pelvis there, feet towards +x): the legs touch nothing, their heels
+    // hang over space the scan never saw. They do not refute lying (`unseen_sweeps`); with
+    // the key removed they do; and on a strip whose width is unknown too (cut lengthwise
+    // as well) they do.
+    let mut m = Mesh::new();
+    mattress(&mut m, -1.0, 1.0, 0.5);
+    let c = seen(&cloud(&m), -3.0..0.0);
+    for height in [1.65, 1.75, 1.85] {
+        let (agent, h) = lying(height);
+        let node = h.nodes.iter().position(|n| n.id == "lying").unwrap();
+        assert!(!h.nodes[node].unseen_sweeps.is_empty());
+        let mut without = h.clone();
+        without.nodes[node].unseen_sweeps.clear();
+        let found = unfolded_with(&c, &agent, &h, 0.0, false);
+        assert_eq!(found, ["lying", "elongated_body"], "at {height} m");
+        let refuted = unfolded_with(&c, &agent, &without, 0.0, false);
+        assert!(
+            refuted.is_empty(),
+            "without the key, at {height} m: {refuted:?}"
+        );
+        let narrow = unfolded_with(&c, &agent, &h, 0.0, true);
+        assert!(
+            narrow.is_empty(),
+            "width unknown, at {height} m: {narrow:?}"
+        );
     }
 }
 

@@ -24,6 +24,9 @@ pub struct Fit {
     /// the place's own heading was free: such a pose is turned from where the place
     /// faces, and ranks below the others (`Unfolded::rank`).
     pub turned: bool,
+    /// The hypothesis's [`Hypothesis::unseen_width`]: the width of the surface round the
+    /// place is unknown, so the unfolding leaves no branch over unseen space untouched.
+    pub unseen_width: bool,
 }
 
 /// Numbers of the fitting that are not the hierarchy's: how finely contact is located.
@@ -267,6 +270,7 @@ fn fit_headings(
                 posture: posture.clone(),
                 stability: s,
                 turned: false,
+                unseen_width: hyp.unseen_width,
             });
         }
     }
@@ -352,6 +356,7 @@ mod tests {
             facing: None,
             memberships: [1.0; 3],
             risen: false,
+            unseen_width: false,
         }
     }
 

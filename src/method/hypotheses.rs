@@ -36,6 +36,11 @@ pub struct Hypothesis {
     /// `rise_height`): such a place is a seat only where no plain one is near, and its
     /// detections rank after those of plain places.
     pub risen: bool,
+    /// Whether the surface round the place was narrower in view than the `surface` rule's
+    /// `min_width` and passed only because the scan runs on unseen across it (a bed cut
+    /// lengthwise by the image edge): its width is unknown. Such a place may not also
+    /// leave the legs over unseen space (the node's `unseen_sweeps`).
+    pub unseen_width: bool,
 }
 
 /// Rates every valid cell of `map` with the rule of section 4.1 for an agent of body
@@ -127,10 +132,11 @@ fn hypotheses_in_pieces(
             // the scan across its axis (a bed cut lengthwise by the image edge) is of
             // unknown width, not too narrow; its axis is known where it is elongated and
             // at least as long as the surface's reach (half a body).
+            let mut unseen_width = false;
             if let Some((sr, rise, shape)) = &shape {
                 let reach = sr.radius * body_height;
-                let too_narrow = shape.width < sr.min_width * body_height
-                    && !(shape.length >= reach
+                if shape.width < sr.min_width * body_height {
+                    unseen_width = shape.length >= reach
                         && shape.along(sr.elongation).is_some()
                         && open_across(
                             map,
@@ -139,9 +145,10 @@ fn hypotheses_in_pieces(
                             reach / 2.0,
                             (mean, sr.tolerance, *rise),
                             sr.face,
-                        ));
-                if too_narrow {
-                    continue;
+                        );
+                    if !unseen_width {
+                        continue;
+                    }
                 }
             }
             // Where the gradient is flat, the direction across the surface's long axis
@@ -170,6 +177,7 @@ fn hypotheses_in_pieces(
                 facing,
                 memberships,
                 risen,
+                unseen_width,
             });
         }
     };

@@ -32,6 +32,21 @@ pub struct NodeOutcome {
     pub found: bool,
     /// Local score (Eq. 3 combined by the T-norm of Eq. 4); 0 when not visited.
     pub local: f64,
+    /// Whether the node was found only by leaving a branch untouched over space the scan
+    /// never saw (`unseen_sweeps`).
+    pub unseen: bool,
+}
+
+/// What unfolding one node gave ([`NodeContext::unfold`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodeFound {
+    /// Whether the node was found.
+    pub found: bool,
+    /// Its local score (Eq. 3 combined by the T-norm of Eq. 4).
+    pub local: f64,
+    /// Whether it was found only by leaving a branch untouched over space the scan never
+    /// saw (`unseen_sweeps`).
+    pub unseen: bool,
 }
 
 /// The agent after unfolding: the goal configuration H_g and what it found.
@@ -71,6 +86,7 @@ pub(crate) fn pose_at(
                 visited: true,
                 found: i < found,
                 local: 1.0,
+                unseen: false,
             })
             .collect(),
         score,
@@ -83,6 +99,12 @@ impl Unfolded {
     /// Number of fine-grained affordances found.
     pub fn found(&self) -> usize {
         self.nodes.iter().filter(|n| n.found).count()
+    }
+
+    /// Whether some node was found only by leaving a branch untouched over space the scan
+    /// never saw (`unseen_sweeps`).
+    pub fn unseen(&self) -> bool {
+        self.nodes.iter().any(|n| n.unseen)
     }
 
     /// Whether `self` ranks above `other` under `select` (ties are not stronger).
@@ -155,6 +177,7 @@ pub fn unfold(
                 visited: false,
                 found: false,
                 local: 0.0,
+                unseen: false,
             });
             continue;
         }
@@ -168,24 +191,26 @@ pub fn unfold(
                 place,
                 node,
                 contact,
+                unseen_width: fit.unseen_width,
             }
             .unfold(posture)
         };
-        let (mut found, mut local) = unfold_at(&placement, &mut posture);
-        if let (false, Some(slide), Some(start)) = (found, &node.slide, &start) {
-            if let Some((moved, l, slid)) =
+        let mut got = unfold_at(&placement, &mut posture);
+        if let (false, Some(slide), Some(start)) = (got.found, &node.slide, &start) {
+            if let Some((moved, g, slid)) =
                 slide_back(agent, scene, &placement, start, slide, unfold_at)
             {
-                (found, local, posture, placement) = (true, l, slid, moved);
+                (got, posture, placement) = (g, slid, moved);
             }
         }
-        if found {
-            score = t_conorm(score, local);
+        if got.found {
+            score = t_conorm(score, got.local);
         }
         nodes.push(NodeOutcome {
             visited: true,
-            found,
-            local,
+            found: got.found,
+            local: got.local,
+            unseen: got.found && got.unseen,
         });
     }
     Unfolded {
@@ -210,8 +235,8 @@ fn slide_back(
     place: &Placement,
     start: &Posture,
     slide: &Slide,
-    mut unfold: impl FnMut(&Placement, &mut Posture) -> (bool, f64),
-) -> Option<(Placement, f64, Posture)> {
+    mut unfold: impl FnMut(&Placement, &mut Posture) -> NodeFound,
+) -> Option<(Placement, NodeFound, Posture)> {
     let back = -Vector3::new(place.yaw.cos(), place.yaw.sin(), 0.0);
     let up = Vector3::new(0.0, 0.0, slide.lift);
     let (mut frames, mut parts) = (Vec::new(), Vec::new());
@@ -234,9 +259,9 @@ fn slide_back(
             return None;
         }
         let mut posture = start.clone();
-        let (found, local) = unfold(&moved, &mut posture);
-        if found {
-            return Some((moved, local, posture));
+        let got = unfold(&moved, &mut posture);
+        if got.found {
+            return Some((moved, got, posture));
         }
     }
     None
@@ -261,6 +286,10 @@ pub struct NodeContext<'a> {
     pub node: &'a Node,
     /// How finely contact is located.
     pub contact: &'a ContactConfig,
+    /// Whether the width of the surface round the place is unknown
+    /// ([`crate::method::hypotheses::Hypothesis::unseen_width`]): then no branch may stay
+    /// untouched over unseen space (`unseen_sweeps`).
+    pub unseen_width: bool,
 }
 
 impl NodeContext<'_> {
@@ -530,6 +559,24 @@ impl NodeContext<'_> {
         worst
     }
 
+    /// `unseen_sweeps`: whether `branch`, whose sweep touched nothing, is not refuted by
+    /// that: every one of its sweeps is among the node's `unseen_sweeps`, it touched
+    /// nothing at all (its joints rest at their preferred angles, where Eq. 2 leaves an
+    /// untouched sweep; a contact a rule refused leaves them at its angle), and its support
+    /// parts there hang over space the scan never saw ([`Rest::Unseen`]). The legs of a
+    /// body on a bed the image edge cuts across at the hips are such a branch; a place of
+    /// unknown width (a strip cut lengthwise) has used up what the scan may leave unseen.
+    fn unseen(&self, posture: &Posture, branch: &[usize]) -> bool {
+        let node = self.node;
+        !self.unseen_width
+            && !branch.is_empty()
+            && branch.iter().all(|&s| {
+                let sw = &node.sweeps[s];
+                node.unseen_sweeps.contains(&sw.joint) && posture.angles[sw.joint] == sw.thetad
+            })
+            && self.resting(posture, branch) == Rest::Unseen
+    }
+
     /// `fallback`: for a branch whose sweep found nothing, sets the node's fallback joints
     /// that move the branch's links to their `k`-th angles (k = 0, 1, ..., all together)
     /// and sweeps the branch again; a setting is tried only if the links those joints move
@@ -696,8 +743,9 @@ impl NodeContext<'_> {
     }
 
     /// Sweeps the node's joints, writing the resulting angles (Eq. 2) into `posture`;
-    /// returns whether it touched and its local score.
-    pub fn unfold(&self, posture: &mut Posture) -> (bool, f64) {
+    /// returns whether it touched, its local score, and whether it touched only by leaving
+    /// a branch untouched over unseen space.
+    pub fn unfold(&self, posture: &mut Posture) -> NodeFound {
         let (agent, node) = (self.agent, self.node);
         let before = posture.clone();
         self.clamp(posture);
@@ -730,13 +778,14 @@ impl NodeContext<'_> {
             .filter(|sp| branch_links.iter().filter(|ls| moves(sp, ls)).count() > 1)
             .collect();
         let shared_settings = shared.iter().map(|sp| sp.angles.len()).max().unwrap_or(1);
-        let mut outcome: Option<(bool, f64, Posture)> = None;
+        let mut outcome: Option<(bool, f64, bool, Posture)> = None;
         for ks in 0..shared_settings {
             let mut node_posture = posture.clone();
             Self::spread(&shared, ks, &mut node_posture);
             let mut local = 1.0;
             let mut found = false;
             let mut all_found = true;
+            let mut unseen_any = false;
             for (branch, links) in branches.iter().zip(&branch_links) {
                 // The spread joints that move only this branch's links; each of their
                 // angles is tried.
@@ -767,6 +816,9 @@ impl NodeContext<'_> {
                         best = Some((Some(t), r, trial));
                     }
                 }
+                let unseen = best
+                    .as_ref()
+                    .is_some_and(|(hit, _, trial)| hit.is_none() && self.unseen(trial, branch));
                 if let Some((hit, r, trial)) = best {
                     for &s in branch {
                         let j = node.sweeps[s].joint;
@@ -779,8 +831,11 @@ impl NodeContext<'_> {
                         node_posture.angles[sp.joint] = trial.angles[sp.joint];
                     }
                     found |= hit.is_some();
-                    all_found &= hit.is_some();
-                    local = t_norm(local, r);
+                    all_found &= hit.is_some() || unseen;
+                    unseen_any |= unseen;
+                    if !unseen {
+                        local = t_norm(local, r);
+                    }
                 }
             }
             if node.contact == crate::model::hierarchy::ContactRule::All {
@@ -797,20 +852,24 @@ impl NodeContext<'_> {
             }
             let better = match &outcome {
                 None => true,
-                Some((bf, bl, _)) => (found && !*bf) || (found == *bf && local > *bl),
+                Some((bf, bl, _, _)) => (found && !*bf) || (found == *bf && local > *bl),
             };
             if better {
-                outcome = Some((found, local, node_posture));
+                outcome = Some((found, local, unseen_any, node_posture));
             }
         }
-        let (found, local, node_posture) = outcome.expect("at least one setting");
+        let (found, local, unseen, node_posture) = outcome.expect("at least one setting");
         *posture = node_posture;
         // A contact far from every preferred angle is no use of the affordance.
         let found = found && local >= self.h.score.min_local;
         if !found {
             self.unclamp(posture, &before);
         }
-        (found, local)
+        NodeFound {
+            found,
+            local,
+            unseen,
+        }
     }
 }
 
@@ -973,6 +1032,7 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
             place,
             node,
             contact: &CONTACT,
+            unseen_width: false,
         }
     }
 
@@ -1089,6 +1149,7 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
             posture: h.initial.clone(),
             stability: 1.0,
             turned: false,
+            unseen_width: false,
         };
         let x = |u: &Unfolded| u.placement.position.x;
         let shallow = chair(55);
@@ -1166,6 +1227,7 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
             posture: h.initial.clone(),
             stability: 1.0,
             turned: false,
+            unseen_width: false,
         };
         // On the mattress's edge, 0.12 m in front of the pillow, facing +x: the leaning
         // trunk meets the pillow's top edge; beyond the pillow the mattress goes on.
@@ -1201,6 +1263,7 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
             posture: h.initial.clone(),
             stability: 1.0,
             turned: false,
+            unseen_width: false,
         };
         // A rim 0.15 m high (a pillow's height) touches the trunk only at its lowest part.
         let rim = chair(15);

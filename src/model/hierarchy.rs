@@ -288,6 +288,15 @@ pub struct Node {
     /// as resting: a bed cut by the image edge, or whose far end the camera cannot see.
     /// `None`: only a surface counts.
     pub unseen_reach: Option<f64>,
+    /// Joints (indices) among the node's sweeps whose branch may touch nothing over its
+    /// whole sweep (nor anything a rule refused) where its support parts, at the preferred
+    /// angles, then hang over space the scan never saw (`unseen_reach`): the legs of a body
+    /// on a bed the image edge cuts across at the hips. Such a branch neither refutes
+    /// `contact = "all"` nor changes the node's local score; at least one branch must still
+    /// touch, and one rest on a surface the scan saw. Never where the place's width is
+    /// unknown too ([`crate::method::hypotheses::Hypothesis::unseen_width`]). Empty: every
+    /// branch must touch.
+    pub unseen_sweeps: Vec<usize>,
     /// What the node finds lies beside the body, not across in front of it (`None`: no
     /// such test).
     pub beside: Option<Beside>,
@@ -553,6 +562,8 @@ struct NodeFile {
     support_share: Option<f64>,
     #[serde(default)]
     unseen_reach: Option<f64>,
+    #[serde(default)]
+    unseen_sweeps: Vec<String>,
     #[serde(default)]
     beside: Option<BesideFile>,
     #[serde(default)]
@@ -1378,6 +1389,26 @@ fn resolve_node(
     if sweeps.is_empty() {
         return Err(src.invalid(&key.key("sweep"), "a node needs at least one joint sweep"));
     }
+    let mut unseen_sweeps = Vec::new();
+    for (k, name) in n.unseen_sweeps.iter().enumerate() {
+        let uk = key.key("unseen_sweeps").item(k, name);
+        let j = names.joint(&uk, name)?;
+        if !sweeps.iter().any(|s| s.joint == j) {
+            return Err(src.invalid(
+                &uk,
+                format!("joint `{name}` is not one of the node's sweeps"),
+            ));
+        }
+        if n.unseen_reach.is_none() {
+            return Err(src.invalid(
+                &uk,
+                "needs `unseen_reach`: it says how far from a support part the scan saw nothing",
+            ));
+        }
+        if !unseen_sweeps.contains(&j) {
+            unseen_sweeps.push(j);
+        }
+    }
     let mut spreads: Vec<Spread> = Vec::new();
     for (k, sp) in n.spread.iter().enumerate() {
         let sk = key.key("spread").item(k, &sp.joint);
@@ -1476,6 +1507,7 @@ fn resolve_node(
         support_gap: n.support_gap,
         support_share: n.support_share,
         unseen_reach: n.unseen_reach,
+        unseen_sweeps,
         beside,
         rear,
         beyond,
@@ -2001,6 +2033,48 @@ mod tests {
         names(&e, line, "node.backrest.beyond", "length");
         let (e, line) = edited(rule, &rule.replace("rise = 0.06", "rise = -0.06"));
         names(&e, line, "node.backrest.beyond.rise", "0 or more");
+    }
+
+    #[test]
+    fn a_bad_unseen_sweeps_is_named() {
+        let lying = crate::model::set::BUILTIN_LYING;
+        let rule = "unseen_sweeps = [\"hip_l\", \"hip_r\"]";
+        assert_eq!(lying.matches(rule).count(), 1);
+        let h = load(lying).unwrap();
+        let node = h.nodes.iter().find(|n| n.id == "lying").unwrap();
+        let hips: Vec<usize> = node.sweeps[1..].iter().map(|s| s.joint).collect();
+        assert_eq!(node.unseen_sweeps, hips);
+        assert!(h
+            .nodes
+            .iter()
+            .all(|n| n.id == "lying" || n.unseen_sweeps.is_empty()));
+        for (to, joint, what) in [
+            (
+                "unseen_sweeps = [\"hip_l\", \"knee_r\"]",
+                "knee_r",
+                "not one of the node's sweeps",
+            ),
+            (
+                "unseen_sweeps = [\"hip_l\", \"tail\"]",
+                "tail",
+                "unknown joint `tail`",
+            ),
+        ] {
+            let bad = lying.replace(rule, to);
+            let key = format!("node.lying.unseen_sweeps.{joint}");
+            names(&error(&bad), line_of(&bad, to, 0), &key, what);
+        }
+        // Without `unseen_reach` nothing says how far the scan saw nothing.
+        let reach = "unseen_reach = 0.10";
+        assert_eq!(lying.matches(reach).count(), 1);
+        let bad = lying.replace(reach, "");
+        let key = "node.lying.unseen_sweeps.hip_l";
+        names(
+            &error(&bad),
+            line_of(&bad, rule, 0),
+            key,
+            "needs `unseen_reach`",
+        );
     }
 
     #[test]

@@ -837,6 +837,7 @@ mod tests {
             facing: None,
             memberships: [1.0; 3],
             risen: false,
+            unseen_width: false,
         }
     }
 
