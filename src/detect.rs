@@ -240,17 +240,22 @@ pub fn best_at(
         .chain(rest)
         .map(|f| unfold(agent, h, scene, f, &cfg.contact))
         .filter(|u| u.nodes.first().is_some_and(|r| r.found));
-    // A pose that rests on what the scan saw comes before one that leaves a part over
-    // space the scan never saw (`unseen_sweeps`): the first found with nothing left
-    // unseen, else the first found.
+    (first_seen(found), n)
+}
+
+/// The first of `found` (poses in the order their fits are tried) that leaves nothing over
+/// space the scan never saw, else the first at all: a pose that rests on what the scan saw
+/// comes before one found only by leaving a part over unseen space (`unseen_sweeps`).
+/// Stops at the first such pose, so the rest are not unfolded.
+fn first_seen(found: impl IntoIterator<Item = Unfolded>) -> Option<Unfolded> {
     let mut first_unseen = None;
     for u in found {
         if !u.unseen() {
-            return (Some(u), n);
+            return Some(u);
         }
         first_unseen.get_or_insert(u);
     }
-    (first_unseen, n)
+    first_unseen
 }
 
 /// Runs the whole method on `cloud` for one agent and one hierarchy.
@@ -588,6 +593,26 @@ mod tests {
                 ));
             }
         }
+    }
+
+    #[test]
+    fn a_pose_on_what_the_scan_saw_comes_before_one_over_unseen_space() {
+        use crate::method::unfold::pose_at;
+        // Poses at x = 0, 1, 2 in the order their fits are tried; `unseen` marks those
+        // found only by leaving the legs over unseen space.
+        let poses = |unseen: [bool; 3]| {
+            (0..3).map(move |i| {
+                let mut u = pose_at(Point3::new(i as f64, 0.0, 0.5), false, 2, 0.9);
+                u.nodes[0].unseen = unseen[i];
+                u
+            })
+        };
+        let x = |u: Option<Unfolded>| u.map(|u| u.placement.position.x);
+        assert_eq!(x(first_seen(poses([true, false, false]))), Some(1.0));
+        assert_eq!(x(first_seen(poses([false, true, false]))), Some(0.0));
+        assert_eq!(x(first_seen(poses([true, true, false]))), Some(2.0));
+        assert_eq!(x(first_seen(poses([true, true, true]))), Some(0.0));
+        assert_eq!(x(first_seen(std::iter::empty())), None);
     }
 
     #[test]
