@@ -11,6 +11,7 @@ use crate::cloud::{point_spacing, PointCloud};
 use crate::method::extent::{guard, ExtentConfig, ExtentError};
 use crate::method::fit::{fit, ContactConfig, Fit};
 use crate::method::heightmap::{HeightMap, HeightMapConfig, Spacing};
+use crate::method::hidden::{hidden_seats, HiddenConfig};
 use crate::method::holes::{fill, fill_points, holes, Hole, HoleConfig};
 use crate::method::hypotheses::{hypotheses, Hypothesis};
 use crate::method::scene::{Scene, SceneConfig};
@@ -28,6 +29,9 @@ pub struct DetectConfig {
     pub heightmap: HeightMapConfig,
     /// The holes of a view filled before the grids ([`crate::method::holes`]).
     pub holes: HoleConfig,
+    /// The seats hidden behind their backs and arms filled after them
+    /// ([`crate::method::hidden`]).
+    pub hidden: HiddenConfig,
     /// Voxelisation of the scene.
     pub scene: SceneConfig,
     /// Contact location.
@@ -70,6 +74,7 @@ impl DetectConfig {
         DetectConfig {
             heightmap: HeightMapConfig::default(),
             holes: HoleConfig::default(),
+            hidden: HiddenConfig::default(),
             scene: SceneConfig {
                 voxel_size,
                 // Paper, section 3.1: agent and scene share the ground plane z = 0.
@@ -172,7 +177,8 @@ pub struct Prepared {
     /// The voxelised scene.
     pub scene: Scene,
     /// The holes of the height map filled before hypotheses and fits
-    /// ([`crate::method::holes`]); their cells are set in `map` and occupied in `scene`.
+    /// ([`crate::method::holes`]), then the seats hidden behind backs and arms
+    /// ([`crate::method::hidden`]); their cells are set in `map` and occupied in `scene`.
     pub filled: Vec<Hole>,
 }
 
@@ -193,9 +199,14 @@ fn prepare_spaced(cloud: &PointCloud, cfg: &DetectConfig, spacing: Spacing) -> P
         },
         || Scene::new(cloud, &cfg.scene),
     );
-    // The holes the scan closes round are filled: their cells valid in the map, their
-    // voxels occupied in a scene built again with the fill.
-    let found = holes(&map, &cfg.holes);
+    // The holes the scan closes round are filled, then the seats hidden inside the backs
+    // and arms that hid them: their cells valid in the map, their voxels occupied in a
+    // scene built again with the fill.
+    let mut found = holes(&map, &cfg.holes);
+    fill(&mut map, &found);
+    let hidden = hidden_seats(&map, &cfg.hidden);
+    fill(&mut map, &hidden);
+    found.extend(hidden);
     if found.is_empty() {
         return Prepared {
             map,
@@ -204,7 +215,6 @@ fn prepare_spaced(cloud: &PointCloud, cfg: &DetectConfig, spacing: Spacing) -> P
         };
     }
     let fill_at = fill_points(&map, &found, cfg.scene.voxel_size);
-    fill(&mut map, &found);
     let mut points = Vec::with_capacity(cloud.len() + fill_at.len());
     points.extend_from_slice(&cloud.points);
     points.extend(fill_at);

@@ -353,6 +353,41 @@ fn the_seat_a_sofa_arm_hides_from_the_camera_gives_the_armrest() {
     }
 }
 
+/// An armchair and a two-seat sofa seen from behind and above, as by a person standing
+/// behind them: the back hides the seat and, with the arms, the floor beyond, so the
+/// height map has nothing between the arms. The seat is filled under the arms
+/// (`afford::method::hidden`), and the body sits in it against the back with a forearm
+/// on an arm; without that stage neither the back nor an arm is found.
+#[test]
+fn an_armchair_and_a_sofa_seen_from_behind_give_sitting_backrest_and_armrest() {
+    let (agent, h) = models(1.75);
+    let mut off = DetectConfig::default();
+    off.hidden.wall_high = 0.0;
+    for seats in [1, 2] {
+        let params = SofaParams {
+            seats,
+            ..SofaParams::default()
+        };
+        let scene = scene_mesh(&[sofa(&params)], true);
+        for (x, y, z) in [(-1.9, -0.9, 1.5), (-2.5, 0.6, 1.3)] {
+            let cam = camera::Camera::looking_at(Point3::new(x, y, z), Point3::new(0.0, 0.0, 0.45));
+            let view = camera::render_view(&scene, &cam, 3).0;
+            let o = run(&view, 1.75);
+            assert_eq!(
+                affords(&o),
+                ["sitting", "backrest", "armrest"],
+                "{seats} seats, camera at ({x}, {y}, {z}): {:?}",
+                o.stats
+            );
+            let without = affords(&detect(&view, &agent, &h, &off));
+            assert!(
+                !without.iter().any(|a| a == "backrest" || a == "armrest"),
+                "{seats} seats, camera at ({x}, {y}, {z}): {without:?}"
+            );
+        }
+    }
+}
+
 /// Height of a desk's top, metres (0.72-0.75 m: the top board 3 cm thick).
 const DESK_TOP: f64 = 0.72;
 

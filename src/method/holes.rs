@@ -107,25 +107,25 @@ fn beside(
 }
 
 /// One bit per cell of a height map.
-struct Bits {
+pub(super) struct Bits {
     nx: usize,
     words: Vec<u64>,
 }
 
 impl Bits {
-    fn new(map: &HeightMap) -> Bits {
+    pub(super) fn new(map: &HeightMap) -> Bits {
         Bits {
             nx: map.nx,
             words: vec![0; (map.nx * map.ny).div_ceil(64)],
         }
     }
 
-    fn get(&self, (x, y): (usize, usize)) -> bool {
+    pub(super) fn get(&self, (x, y): (usize, usize)) -> bool {
         let i = y * self.nx + x;
         self.words[i / 64] >> (i % 64) & 1 == 1
     }
 
-    fn set(&mut self, (x, y): (usize, usize), on: bool) {
+    pub(super) fn set(&mut self, (x, y): (usize, usize), on: bool) {
         let i = y * self.nx + x;
         if on {
             self.words[i / 64] |= 1 << (i % 64);

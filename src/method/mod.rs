@@ -9,6 +9,7 @@ pub mod extent;
 pub mod fit;
 pub mod fuzzy;
 pub mod heightmap;
+pub mod hidden;
 pub mod holes;
 pub mod hypotheses;
 pub mod scene;

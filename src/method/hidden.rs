@@ -1,0 +1,399 @@
+//! Seats hidden behind their backs and arms: the seat of an armchair or a sofa seen from
+//! behind, filled under the walls that hide it before the grids are built.
+//!
+//! A camera behind an armchair, above its back, sees the back and the arms and nothing of
+//! the seat between them: the back's shadow covers the seat and the floor beyond it. The
+//! height map (section 4.1) has no valid cell there, so no hypothesis, and the scene
+//! nothing to sit on; the hole stage ([`crate::method::holes`]) leaves the place empty,
+//! since nothing at the seat's level closes round it. What the scan shows is the shape
+//! that hides it: walls (a back and one or both arms) 0.5-1.0 m high and thin seen from
+//! above, round a concave space the scan never saw. Such a space is filled: a place as
+//! wide as a body's hips, inside the convex hull of one component of such walls, with
+//! nothing seen within its radius, is filled somewhat below the walls' lowest part, where
+//! a seat under such arms is.
+//!
+//! What decides is the shape of what hides the place, not one more threshold on the
+//! hole: a convex thing (a cabinet or a box seen from its corner, a table top) has no
+//! hidden space inside its hull; a thick one (a bed's mattress, a table, a counter) is a
+//! surface, not walls; higher walls (room walls, shelves, desks with raised back panels)
+//! are left out. The body then sits, leans and rests its arms against what the scan did
+//! see, as everywhere else ([`crate::method::unfold`]).
+//!
+//! The fill is as for holes ([`crate::method::holes::fill`],
+//! [`crate::method::holes::fill_points`]): the cells set in the height map and points
+//! added over them to the cloud the scene is built from (not to the segmented points).
+//! This is not in the paper.
+
+use crate::method::heightmap::HeightMap;
+use crate::method::holes::{Bits, Hole};
+use crate::num::to_usize;
+
+/// Which hidden places are filled, and at what height.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HiddenConfig {
+    /// Lowest height of a cell that may be a seat's back or arm, metres above the floor.
+    pub wall_low: f64,
+    /// Highest height of such a cell, metres above the floor.
+    pub wall_high: f64,
+    /// Half the widest a back or an arm is seen from above, metres: the largest distance,
+    /// in steps between side-by-side cells, from a cell of the walls to a cell that is not
+    /// one of them, times the cell size.
+    pub max_half_width: f64,
+    /// Radius of a hidden place, metres: no cell of the map is seen within it.
+    pub clear: f64,
+    /// The walls' level is this quantile of their cells' heights (0 the lowest).
+    pub level_quantile: f64,
+    /// The hidden seat is filled this many metres below the walls' level.
+    pub drop: f64,
+}
+
+impl Default for HiddenConfig {
+    fn default() -> Self {
+        HiddenConfig {
+            // 0.50 m: arms rise to 0.55-0.70 m and backs to 0.70-1.00 m; the highest
+            // seats (0.48 m) stay below, so a seat the scan saw is never a wall.
+            wall_low: 0.50,
+            // 1.00 m: dining chairs' and armchairs' backs end at 0.75-1.00 m; higher, the
+            // band takes in desks with raised back panels, shelves and room walls (a
+            // real-model desk 1.02 m high seen from behind was sat in with 1.05). High
+            // backs and wingbacks (1.1-1.4 m) seen from behind are missed.
+            wall_high: 1.00,
+            // 0.20 m: a back or an arm seen from above is at most 0.40 m thick (upholstered
+            // backs 0.15-0.30 m, 2-3 cells from their edge at 0.05 m); a bed's mattress
+            // with its pillows, a table's top or a counter's reach 6-12 cells in.
+            max_half_width: 0.20,
+            // 0.15 m: about half an adult's hip width (0.30-0.35 m); an unseen gap
+            // narrower than a body between walls is a gap, not a seat.
+            clear: 0.15,
+            // The lowest tenth of the walls: the arms where the back is higher, a few
+            // lower cells aside (an arm's sloping front end, noise).
+            level_quantile: 0.1,
+            // 0.15 m: arms rise 0.15-0.25 m above a seat (the wide mix's wingbacks
+            // 0.16-0.24 m, the real-model armchairs about 0.2 m), so the forearm then
+            // finds the arm inside the armrest band (0.12-0.35 m above the seat).
+            // Measured on the real-model views of seed 3 from 0.10 to 0.25 m: 0.15 gave
+            // the most armrests, the same seats from 0.10 to 0.18 m.
+            drop: 0.15,
+        }
+    }
+}
+
+/// The seats hidden inside walls of `map` that `cfg` fills: per component of wall cells
+/// (cells between `wall_low` and `wall_high`, joined through sides and corners) that is
+/// thin, the hidden places inside its convex hull (cells the scan did not see, with
+/// none seen within `clear`), each grown to the disc of radius `clear` round it, at the
+/// walls' level less `drop`. Components are taken in the order of
+/// [`HeightMap::cells_at_least`]; a cell two of them would fill goes to the first, so
+/// the answer is deterministic. Run on the map with its holes filled.
+pub fn hidden_seats(map: &HeightMap, cfg: &HiddenConfig) -> Vec<Hole> {
+    let is_wall = |h: f64| (cfg.wall_low..=cfg.wall_high).contains(&h);
+    // Lengths in whole cells; the small offset keeps 0.15 / 0.05 at 3, not 4.
+    let cells = |len: f64| to_usize((len / map.cell - 1e-9).ceil());
+    let radius = cells(cfg.clear);
+    let deepest = to_usize((cfg.max_half_width / map.cell + 1e-9).floor());
+    let mut walls = Bits::new(map);
+    let mut taken = Bits::new(map);
+    let mut out = Vec::new();
+    for start in map.cells_at_least(cfg.wall_low) {
+        if walls.get(start) || !height(map, start).is_some_and(is_wall) {
+            continue;
+        }
+        let comp = component(map, start, &is_wall, &mut walls);
+        let bounds = Bounds::of(&comp);
+        if half_width(&comp, &bounds) > deepest {
+            continue;
+        }
+        let Some(hull) = Hull::of(&comp) else {
+            continue;
+        };
+        let cells = hidden_places(map, &bounds, &hull, radius, &mut taken);
+        if cells.is_empty() {
+            continue;
+        }
+        let mut heights: Vec<f64> = comp.iter().filter_map(|&c| height(map, c)).collect();
+        heights.sort_by(f64::total_cmp);
+        let q = to_usize((cfg.level_quantile * (heights.len() - 1) as f64).round());
+        let level = heights[q.min(heights.len() - 1)];
+        out.push(Hole {
+            cells,
+            height: level - cfg.drop,
+        });
+    }
+    out
+}
+
+/// The height of cell `(x, y)`, if the scan saw it.
+fn height(map: &HeightMap, (x, y): (usize, usize)) -> Option<f64> {
+    map.get(x as isize, y as isize)
+}
+
+/// The cell `(x + dx, y + dy)`, if it is inside `map`.
+fn offset(map: &HeightMap, (x, y): (usize, usize), dx: isize, dy: isize) -> Option<(usize, usize)> {
+    let (x, y) = (x.checked_add_signed(dx)?, y.checked_add_signed(dy)?);
+    (x < map.nx && y < map.ny).then_some((x, y))
+}
+
+/// The wall cells joined to `start` through sides and corners, marked in `walls`.
+fn component(
+    map: &HeightMap,
+    start: (usize, usize),
+    is_wall: &impl Fn(f64) -> bool,
+    walls: &mut Bits,
+) -> Vec<(usize, usize)> {
+    let mut comp = vec![start];
+    walls.set(start, true);
+    let mut next = 0;
+    while next < comp.len() {
+        let c = comp[next];
+        next += 1;
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                let Some(n) = offset(map, c, dx, dy) else {
+                    continue;
+                };
+                if !walls.get(n) && height(map, n).is_some_and(is_wall) {
+                    walls.set(n, true);
+                    comp.push(n);
+                }
+            }
+        }
+    }
+    comp
+}
+
+/// The cells' bounding box, inclusive.
+struct Bounds {
+    x0: usize,
+    x1: usize,
+    y0: usize,
+    y1: usize,
+}
+
+impl Bounds {
+    /// The bounding box of `cells` (not empty).
+    fn of(cells: &[(usize, usize)]) -> Bounds {
+        let mut b = Bounds {
+            x0: usize::MAX,
+            x1: 0,
+            y0: usize::MAX,
+            y1: 0,
+        };
+        for &(x, y) in cells {
+            (b.x0, b.x1, b.y0, b.y1) = (b.x0.min(x), b.x1.max(x), b.y0.min(y), b.y1.max(y));
+        }
+        b
+    }
+}
+
+/// The largest distance, in steps between side-by-side cells, from a cell of `comp` to a
+/// cell not in it (1 at its edge): half the width of the widest part, in cells. Two
+/// passes of the city-block distance transform over the component's box with a border.
+fn half_width(comp: &[(usize, usize)], b: &Bounds) -> usize {
+    let (w, h) = (b.x1 - b.x0 + 3, b.y1 - b.y0 + 3);
+    let mut d = vec![0usize; w * h];
+    for &(x, y) in comp {
+        d[(y - b.y0 + 1) * w + (x - b.x0 + 1)] = usize::MAX / 2;
+    }
+    for j in 1..h - 1 {
+        for i in 1..w - 1 {
+            let k = j * w + i;
+            if d[k] > 0 {
+                d[k] = d[k].min(d[k - 1] + 1).min(d[k - w] + 1);
+            }
+        }
+    }
+    let mut deepest = 0;
+    for j in (1..h - 1).rev() {
+        for i in (1..w - 1).rev() {
+            let k = j * w + i;
+            if d[k] > 0 {
+                d[k] = d[k].min(d[k + 1] + 1).min(d[k + w] + 1);
+                deepest = deepest.max(d[k]);
+            }
+        }
+    }
+    deepest
+}
+
+/// The convex hull of cell centres, counter-clockwise, in cell units.
+struct Hull(Vec<(i64, i64)>);
+
+/// Twice the signed area of the triangle `o a b`: positive when `b` is left of `o -> a`.
+fn cross(o: (i64, i64), a: (i64, i64), b: (i64, i64)) -> i64 {
+    (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+}
+
+impl Hull {
+    /// The hull of `cells` (Andrew's monotone chain), or `None` when they lie on a line.
+    fn of(cells: &[(usize, usize)]) -> Option<Hull> {
+        let mut pts: Vec<(i64, i64)> = cells.iter().map(|&(x, y)| (x as i64, y as i64)).collect();
+        pts.sort_unstable();
+        pts.dedup();
+        let mut hull: Vec<(i64, i64)> = Vec::new();
+        for &p in pts.iter().chain(pts.iter().rev().skip(1)) {
+            while hull.len() >= 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0 {
+                hull.pop();
+            }
+            hull.push(p);
+        }
+        hull.pop();
+        (hull.len() >= 3).then_some(Hull(hull))
+    }
+
+    /// Whether the centre of cell `(x, y)` lies strictly inside.
+    fn contains(&self, (x, y): (usize, usize)) -> bool {
+        let p = (x as i64, y as i64);
+        let n = self.0.len();
+        (0..n).all(|i| cross(self.0[i], self.0[(i + 1) % n], p) > 0)
+    }
+}
+
+/// The cells of the hidden places inside `hull` (within `b`): each unseen cell with no
+/// seen cell within `radius` cells, and the disc of that radius round it; cells already
+/// `taken` by an earlier component are left to it. Row by row.
+fn hidden_places(
+    map: &HeightMap,
+    b: &Bounds,
+    hull: &Hull,
+    radius: usize,
+    taken: &mut Bits,
+) -> Vec<(usize, usize)> {
+    let r = radius as isize;
+    let disc = |c: (usize, usize)| {
+        (-r..=r)
+            .flat_map(move |dy| (-r..=r).map(move |dx| (dx, dy)))
+            .filter(move |&(dx, dy)| dx * dx + dy * dy <= r * r)
+            .map(move |(dx, dy)| (c, dx, dy))
+    };
+    let mut out = Vec::new();
+    for y in b.y0..=b.y1 {
+        for x in b.x0..=b.x1 {
+            let c = (x, y);
+            if height(map, c).is_some() || !hull.contains(c) {
+                continue;
+            }
+            let clear = disc(c)
+                .all(|(c, dx, dy)| offset(map, c, dx, dy).is_none_or(|n| height(map, n).is_none()));
+            if !clear {
+                continue;
+            }
+            for (c, dx, dy) in disc(c) {
+                if let Some(n) = offset(map, c, dx, dy) {
+                    if !taken.get(n) {
+                        taken.set(n, true);
+                        out.push(n);
+                    }
+                }
+            }
+        }
+    }
+    out.sort_unstable_by_key(|&(x, y)| (y, x));
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 30 x 30 map of 0.05 m cells, all unseen but a floor band along its low rows
+    /// (y 0-3, at 0) and the `walls` given as `(x0, x1, y0, y1, height)` cell ranges,
+    /// inclusive.
+    fn map_with(walls: &[(usize, usize, usize, usize, f64)]) -> HeightMap {
+        let n = 30;
+        let mut h = vec![None; n * n];
+        for y in 0..4 {
+            for x in 0..n {
+                h[y * n + x] = Some(0.0);
+            }
+        }
+        for &(x0, x1, y0, y1, z) in walls {
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    h[y * n + x] = Some(z);
+                }
+            }
+        }
+        HeightMap::from_dense(0.0, 0.0, 0.05, n, n, &h)
+    }
+
+    /// An armchair seen from behind: its back (0.85 m) along y 20-22, its arms (0.62 m)
+    /// along x 8-9 and 20-21 from y 10 to the back, 0.10 m thick; the seat between them
+    /// and the floor in front unseen.
+    const ARMCHAIR: [(usize, usize, usize, usize, f64); 3] = [
+        (8, 21, 20, 22, 0.85),
+        (8, 9, 10, 19, 0.62),
+        (20, 21, 10, 19, 0.62),
+    ];
+
+    #[test]
+    fn the_seat_between_an_armchairs_back_and_arms_is_filled_below_its_arms() {
+        let map = map_with(&ARMCHAIR);
+        let found = hidden_seats(&map, &HiddenConfig::default());
+        assert_eq!(found.len(), 1);
+        // The lowest tenth of the walls is the arms' 0.62 m; the seat 0.15 m below.
+        assert!((found[0].height - 0.47).abs() < 1e-9);
+        let cells = &found[0].cells;
+        // The middle of the seat is filled, the walls and the floor are not.
+        assert!(cells.contains(&(15, 15)));
+        assert!(cells.iter().all(|&c| height(&map, c).is_none()));
+        assert!(cells
+            .iter()
+            .all(|&(x, y)| (10..=19).contains(&x) && (8..=19).contains(&y)));
+        // One arm and the back (an L, the other arm hidden) still hold it.
+        let map = map_with(&ARMCHAIR[..2]);
+        let found = hidden_seats(&map, &HiddenConfig::default());
+        assert_eq!(found.len(), 1);
+        assert!(found[0].cells.contains(&(13, 15)));
+    }
+
+    #[test]
+    fn a_box_thick_walls_high_walls_and_a_straight_back_hide_no_seat() {
+        // A small cabinet's top (0.75 m, 0.35 x 0.45 m) seen from its corner, its shadow
+        // unseen round it: convex, nothing hidden inside its hull.
+        let map = map_with(&[(8, 14, 10, 18, 0.75)]);
+        assert!(hidden_seats(&map, &HiddenConfig::default()).is_empty());
+        // The armchair's walls 0.5 m thick (a mattress with its pillows, a table).
+        let map = map_with(&[
+            (4, 25, 20, 29, 0.85),
+            (4, 8, 10, 19, 0.62),
+            (21, 25, 10, 19, 0.62),
+        ]);
+        assert!(hidden_seats(&map, &HiddenConfig::default()).is_empty());
+        // The same shape 1.2 m high (a shelf's sides, a desk's raised panels).
+        let high: Vec<_> = ARMCHAIR
+            .iter()
+            .map(|&(a, b, c, d, _)| (a, b, c, d, 1.2))
+            .collect();
+        assert!(hidden_seats(&map_with(&high), &HiddenConfig::default()).is_empty());
+        // A chair's back alone (no arms): nothing inside its hull but itself; turned 45
+        // degrees, its box holds unseen cells either side, outside the hull.
+        assert!(hidden_seats(&map_with(&ARMCHAIR[..1]), &HiddenConfig::default()).is_empty());
+        let turned: Vec<_> = (8..24).map(|x| (x, x + 1, x - 2, x - 2, 0.85)).collect();
+        assert!(hidden_seats(&map_with(&turned), &HiddenConfig::default()).is_empty());
+        // Arms 0.20 m apart: no place as wide as the hips between them.
+        let narrow = [
+            (8, 15, 20, 22, 0.85),
+            (8, 9, 10, 19, 0.62),
+            (14, 15, 10, 19, 0.62),
+        ];
+        assert!(hidden_seats(&map_with(&narrow), &HiddenConfig::default()).is_empty());
+    }
+
+    #[test]
+    fn a_seat_the_scan_saw_is_not_filled_again() {
+        // The seat seen at 0.45 m between the arms: nothing hidden there.
+        let mut walls = ARMCHAIR.to_vec();
+        walls.push((10, 19, 10, 19, 0.45));
+        assert!(hidden_seats(&map_with(&walls), &HiddenConfig::default()).is_empty());
+    }
+
+    #[test]
+    fn the_half_width_of_a_strip_is_half_its_cells() {
+        for (width, half) in [(1, 1), (2, 1), (3, 2), (8, 4), (9, 5)] {
+            let comp: Vec<(usize, usize)> = (0..width)
+                .flat_map(|x| (0..20).map(move |y| (x + 5, y + 5)))
+                .collect();
+            assert_eq!(half_width(&comp, &Bounds::of(&comp)), half, "width {width}");
+        }
+    }
+}
