@@ -186,12 +186,19 @@ pub struct Prepared {
 /// independent (each reads only `cloud` and its own config), so they are built side by
 /// side on rayon's pool: the same grids whatever the thread count.
 pub fn prepare(cloud: &PointCloud, cfg: &DetectConfig) -> Prepared {
-    prepare_spaced(cloud, cfg, Spacing::Measure)
+    prepare_spaced(cloud, cloud, cfg, Spacing::Measure)
 }
 
 /// [`prepare`], with the cloud's point spacing given when already measured
-/// ([`HeightMap::from_cloud_spaced`]), else measured by the height map.
-fn prepare_spaced(cloud: &PointCloud, cfg: &DetectConfig, spacing: Spacing) -> Prepared {
+/// ([`HeightMap::from_cloud_spaced`]), else measured by the height map. `seen` holds every
+/// point the scan saw (`cloud` and the specks left out of it), which a hidden seat must be
+/// clear of ([`hidden_seats`]).
+fn prepare_spaced(
+    cloud: &PointCloud,
+    seen: &PointCloud,
+    cfg: &DetectConfig,
+    spacing: Spacing,
+) -> Prepared {
     let (mut map, scene) = rayon::join(
         || match spacing {
             Spacing::Given(s) => HeightMap::from_cloud_spaced(cloud, &cfg.heightmap, s),
@@ -204,7 +211,7 @@ fn prepare_spaced(cloud: &PointCloud, cfg: &DetectConfig, spacing: Spacing) -> P
     // scene built again with the fill.
     let mut found = holes(&map, &cfg.holes);
     fill(&mut map, &found);
-    let hidden = hidden_seats(&map, &cfg.hidden);
+    let hidden = hidden_seats(&map, &seen.points, &cfg.hidden);
     fill(&mut map, &hidden);
     found.extend(hidden);
     if found.is_empty() {
@@ -305,8 +312,8 @@ pub fn prepare_guarded(
         specks
     };
     Ok(match specks {
-        Some((surface, _)) => prepare_spaced(&surface, cfg, Spacing::Given(spacing)),
-        None => prepare_spaced(&kept.cloud, cfg, Spacing::Given(spacing)),
+        Some((surface, _)) => prepare_spaced(&surface, &kept.cloud, cfg, Spacing::Given(spacing)),
+        None => prepare_spaced(&kept.cloud, &kept.cloud, cfg, Spacing::Given(spacing)),
     })
 }
 
