@@ -93,6 +93,11 @@ struct SynthArgs {
     /// stereo sensors do; 0, the Kinect v1 default, for none.
     #[arg(long, default_value_t = 0.0, value_parser = probability)]
     mixed_pixels: f64,
+    /// Single views of seats from every side alike (by default 85% come from within 80
+    /// degrees of the seat's front): as independently generated views and a robot walking
+    /// round a room see them, seats seen from behind included.
+    #[arg(long)]
+    all_round: bool,
 }
 
 #[derive(clap::Args)]
@@ -437,6 +442,7 @@ fn run(command: Command, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Re
                 views: a.views,
                 stride: a.stride,
                 mixed_pixels: a.mixed_pixels,
+                all_round: a.all_round,
                 wide: a.mix == "wide",
                 camera_frame: a.frame == "camera",
             },

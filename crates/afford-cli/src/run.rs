@@ -719,6 +719,8 @@ pub struct SynthRequest {
     pub stride: u32,
     /// Probability of a mixed ("flying") pixel at each depth edge of a depth view.
     pub mixed_pixels: f64,
+    /// Single views of seats from every side alike (`--all-round`).
+    pub all_round: bool,
     /// Draw from the wide mix (`--mix wide`).
     pub wide: bool,
     /// Write clouds in their camera's frame (`--frame camera`).
@@ -786,6 +788,7 @@ pub fn run_synth(
             dataset::OutFrame::World
         },
         mixed_pixels: req.mixed_pixels,
+        all_round: req.all_round,
         ..Default::default()
     };
     if let Some(c) = &req.count {

@@ -1110,7 +1110,11 @@ pub(super) fn one_scene_wide(
             let r = footprint_radius(&obj.mesh);
             let rel = if wall {
                 u(&mut rng, -70.0, 70.0)
-            } else if obj.labels.sitting && obj.class != Class::BarStool && chance(&mut rng, 0.85) {
+            } else if obj.labels.sitting
+                && obj.class != Class::BarStool
+                && !spec.all_round
+                && chance(&mut rng, 0.85)
+            {
                 // Seen mostly from the front; a bar stool has no front.
                 u(&mut rng, -80.0, 80.0)
             } else {
