@@ -24,12 +24,12 @@
 //! added over them to the cloud the scene is built from (not to the segmented points).
 //! This is not in the paper.
 
+use std::collections::HashMap;
+
 use nalgebra::Point3;
 
 use crate::method::heightmap::HeightMap;
-use crate::method::holes::{Bits, Hole};
-use std::collections::HashMap;
-
+use crate::method::holes::{beside, Bits, Hole};
 use crate::num::{to_isize, to_usize};
 
 /// Which hidden places are filled, and at what height.
@@ -49,9 +49,9 @@ pub struct HiddenConfig {
     pub level_quantile: f64,
     /// The hidden seat is filled this many metres below the walls' level.
     pub drop: f64,
-    /// A point the scan saw inside a hidden place within this many metres of the walls'
-    /// middle height (their median) makes the walls the edges of one surface seen
-    /// sparsely, not walls round a hidden seat.
+    /// The highest point the scan saw over a cell of a hidden place, within this many
+    /// metres of the walls' middle height (their median), makes the walls the edges of
+    /// one surface seen sparsely, not walls round a hidden seat.
     pub surface_tolerance: f64,
 }
 
@@ -94,10 +94,10 @@ impl Default for HiddenConfig {
 /// The seats hidden inside walls of `map` that `cfg` fills: per component of wall cells
 /// (cells between `wall_low` and `wall_high`, joined through sides and corners) that is
 /// thin, the hidden places inside its convex hull (cells the scan did not see, with
-/// none seen within `clear`, and no point of `seen` within it at the walls' middle
-/// height, give or take `surface_tolerance`), each grown to the disc of radius `clear` round it, at the walls' level less
-/// `drop`. `seen` is every point the scan saw, world frame: also the specks left out of
-/// the map, so that a sparse top seen at a grazing angle, whose scattered points are
+/// none seen within `clear`, and over none of which the highest point of `seen` lies at
+/// the walls' middle height, give or take `surface_tolerance`), each grown to the disc of
+/// radius `clear` round it, at the walls' level less `drop`. `seen` is every point the
+/// scan saw, world frame: also the specks left out of the map, so that a sparse top seen at a grazing angle, whose scattered points are
 /// specks, is not taken for a space the scan never saw. Components are taken in the
 /// order of [`HeightMap::cells_at_least`]; a cell two of them would fill goes to the
 /// first, so the answer is deterministic. Run on the map with its holes filled.
@@ -170,14 +170,14 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
     {
         let mut cells = Vec::new();
         for c in centres {
-            let disc_cells: Vec<(usize, usize)> = disc(map, c, radius).collect();
-            if disc_cells.iter().any(|n| {
-                top.get(n)
+            let surface = |n: (usize, usize)| {
+                top.get(&n)
                     .is_some_and(|&z| (z - middle).abs() <= cfg.surface_tolerance)
-            }) {
+            };
+            if disc(map, c, radius).any(surface) {
                 continue;
             }
-            for n in disc_cells {
+            for n in disc(map, c, radius) {
                 if !taken.get(n) {
                     taken.set(n, true);
                     cells.push(n);
@@ -216,18 +216,12 @@ fn disc(
     (-r..=r)
         .flat_map(move |dy| (-r..=r).map(move |dx| (dx, dy)))
         .filter(move |&(dx, dy)| dx * dx + dy * dy <= r * r)
-        .filter_map(move |(dx, dy)| offset(map, c, dx, dy))
+        .filter_map(move |d| beside(map, c, d))
 }
 
 /// The height of cell `(x, y)`, if the scan saw it.
 fn height(map: &HeightMap, (x, y): (usize, usize)) -> Option<f64> {
     map.get(x as isize, y as isize)
-}
-
-/// The cell `(x + dx, y + dy)`, if it is inside `map`.
-fn offset(map: &HeightMap, (x, y): (usize, usize), dx: isize, dy: isize) -> Option<(usize, usize)> {
-    let (x, y) = (x.checked_add_signed(dx)?, y.checked_add_signed(dy)?);
-    (x < map.nx && y < map.ny).then_some((x, y))
 }
 
 /// The wall cells joined to `start` through sides and corners, marked in `walls`.
@@ -245,7 +239,7 @@ fn component(
         next += 1;
         for dy in -1..=1 {
             for dx in -1..=1 {
-                let Some(n) = offset(map, c, dx, dy) else {
+                let Some(n) = beside(map, c, (dx, dy)) else {
                     continue;
                 };
                 if !walls.get(n) && height(map, n).is_some_and(is_wall) {

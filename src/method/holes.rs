@@ -97,7 +97,7 @@ pub struct Hole {
 const SIDES: [(isize, isize); 4] = [(1, 0), (-1, 0), (0, 1), (0, -1)];
 
 /// The cell beside `(x, y)` one step `(dx, dy)` away, if it is inside `map`.
-fn beside(
+pub(super) fn beside(
     map: &HeightMap,
     (x, y): (usize, usize),
     (dx, dy): (isize, isize),
