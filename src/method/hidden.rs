@@ -320,14 +320,21 @@ impl Hull {
         let mut pts: Vec<(i64, i64)> = cells.iter().map(|&(x, y)| (x as i64, y as i64)).collect();
         pts.sort_unstable();
         pts.dedup();
-        let mut hull: Vec<(i64, i64)> = Vec::new();
-        for &p in pts.iter().chain(pts.iter().rev().skip(1)) {
-            while hull.len() >= 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0 {
-                hull.pop();
+        // The lower chain left to right and the upper chain right to left, each with its
+        // own stack, then joined (each without its last point, the other's first).
+        let chain = |pts: &mut dyn Iterator<Item = (i64, i64)>| {
+            let mut c: Vec<(i64, i64)> = Vec::new();
+            for p in pts {
+                while c.len() >= 2 && cross(c[c.len() - 2], c[c.len() - 1], p) <= 0 {
+                    c.pop();
+                }
+                c.push(p);
             }
-            hull.push(p);
-        }
-        hull.pop();
+            c.pop();
+            c
+        };
+        let mut hull = chain(&mut pts.iter().copied());
+        hull.extend(chain(&mut pts.iter().rev().copied()));
         (hull.len() >= 3).then_some(Hull(hull))
     }
 
@@ -443,6 +450,18 @@ mod tests {
             (14, 15, 10, 19, 0.62),
         ];
         assert!(hidden_seats(&map_with(&narrow), &[], &HiddenConfig::default()).is_empty());
+    }
+
+    #[test]
+    fn the_hull_of_an_l_holds_the_space_between_its_legs() {
+        // A row and, at its right end, a column: the column's cells lie in line with the
+        // lower chain's last edge, and must not fold the upper chain back onto the row.
+        let mut cells: Vec<(usize, usize)> = (10..=19).map(|x| (x, 10)).collect();
+        cells.extend((11..=19).map(|y| (19, y)));
+        let hull = Hull::of(&cells).expect("not in line");
+        assert!(hull.contains((17, 13)));
+        assert!(!hull.contains((12, 17)));
+        assert!(!hull.contains((19, 15)));
     }
 
     #[test]
