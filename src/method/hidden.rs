@@ -19,6 +19,13 @@
 //! are left out. The body then sits, leans and rests its arms against what the scan did
 //! see, as everywhere else ([`crate::method::unfold`]).
 //!
+//! A chair without arms seen from behind shows less: its back, and beside one end of it
+//! the seat's side edge, a strip at seat height running forward from the back, while
+//! where the seat is the map holds the floor, seen from behind under the seat. Such strips
+//! joined to the walls widen the hull the place is looked for in, and where one is joined
+//! and the walls and strips span no more across than a seat, the floor inside counts as
+//! unseen too: two walls of a room meeting at a corner span the room.
+//!
 //! The fill is as for holes ([`crate::method::holes::fill`],
 //! [`crate::method::holes::fill_points`]): the cells set in the height map and points
 //! added over them to the cloud the scene is built from (not to the segmented points).
@@ -53,6 +60,15 @@ pub struct HiddenConfig {
     /// metres of the walls' middle height (their median), makes the walls the edges of
     /// one surface seen sparsely, not walls round a hidden seat.
     pub surface_tolerance: f64,
+    /// Lowest height of a cell that may be a seat's side edge, metres: cells from here
+    /// up to `wall_low`, joined to the walls and as thin as they, widen their hull.
+    pub edge_low: f64,
+    /// Inside walls with a seat's edge joined, a cell whose top is lower than this,
+    /// metres (the floor, seen under the seat from behind), counts as unseen.
+    pub floor_top: f64,
+    /// ... only where the walls and the edges span at most this across, metres (the
+    /// shorter side of their box).
+    pub max_span: f64,
 }
 
 impl Default for HiddenConfig {
@@ -87,6 +103,17 @@ impl Default for HiddenConfig {
             // below its arms and further below its back, and a back leaning over the seat
             // far above the arms.
             surface_tolerance: 0.05,
+            // 0.30 m: seats are 0.35-0.50 m high (their side edge seen a little lower
+            // where the cushion is rounded); below, a rail or a stretcher between the legs.
+            edge_low: 0.30,
+            // 0.10 m: the floor, a rug or a chair's star base seen under the seat; a seat
+            // is 0.35 m high and more.
+            floor_top: 0.10,
+            // 1.00 m: a chair, an armchair or a sofa seen from behind spans 0.45-0.95 m
+            // from its back to its seat's front edge; two walls of a room meeting at a
+            // corner span the room (a wide-mix room scan was lain on along its walls with
+            // no bound, and along a 0.6 m band with places kept within 0.6 m of the walls).
+            max_span: 1.00,
         }
     }
 }
@@ -118,10 +145,19 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
         if half_width(&comp, &bounds) > deepest {
             continue;
         }
-        let Some(hull) = Hull::of(&comp) else {
+        // A seat's side edges joined to the walls widen the place they hold; where they
+        // show a seat no wider across than one, the floor under it counts as unseen.
+        let edges = seat_edges(map, &comp, cfg, deepest);
+        let mut shape = comp.clone();
+        shape.extend_from_slice(&edges);
+        let outline = Bounds::of(&shape);
+        let Some(hull) = Hull::of(&shape) else {
             continue;
         };
-        let centres = hidden_centres(map, &bounds, &hull, radius);
+        let across = (outline.x1 - outline.x0 + 1).min(outline.y1 - outline.y0 + 1);
+        let floor_top = (!edges.is_empty() && across as f64 * map.cell <= cfg.max_span + 1e-9)
+            .then_some(cfg.floor_top);
+        let centres = hidden_centres(map, &outline, &hull, radius, floor_top);
         if centres.is_empty() {
             continue;
         }
@@ -222,6 +258,33 @@ fn disc(
 /// The height of cell `(x, y)`, if the scan saw it.
 fn height(map: &HeightMap, (x, y): (usize, usize)) -> Option<f64> {
     map.get(x as isize, y as isize)
+}
+
+/// The cells of `map` between `cfg.edge_low` and `cfg.wall_low` joined to the wall
+/// component `comp` through sides and corners (seat edges, and what joins them at their
+/// height), if they are no thicker than `deepest` cells from their edge (see
+/// [`half_width`]); none where they are thicker (a seat the scan saw, a low table).
+fn seat_edges(
+    map: &HeightMap,
+    comp: &[(usize, usize)],
+    cfg: &HiddenConfig,
+    deepest: usize,
+) -> Vec<(usize, usize)> {
+    let is_edge = |h: f64| (cfg.edge_low..cfg.wall_low).contains(&h);
+    let mut marks = Bits::new(map);
+    let mut edges = Vec::new();
+    for &c in comp {
+        for n in (-1..=1).flat_map(|dy| (-1..=1).filter_map(move |dx| beside(map, c, (dx, dy)))) {
+            if !marks.get(n) && height(map, n).is_some_and(is_edge) {
+                marks.set(n, true);
+                edges.extend(component(map, n, &is_edge, &mut marks));
+            }
+        }
+    }
+    if edges.is_empty() || half_width(&edges, &Bounds::of(&edges)) > deepest {
+        return Vec::new();
+    }
+    edges
 }
 
 /// The wall cells joined to `start` through sides and corners, marked in `walls`.
@@ -347,16 +410,26 @@ impl Hull {
 }
 
 /// The centres of the hidden places inside `hull` (within `b`): the unseen cells with no
-/// seen cell within `radius` cells (the map's border counts as unseen), row by row.
-fn hidden_centres(map: &HeightMap, b: &Bounds, hull: &Hull, radius: usize) -> Vec<(usize, usize)> {
+/// seen cell within `radius` cells (the map's border counts as unseen), row by row. With
+/// `floor_top`, a cell whose top is lower than that counts as unseen (the floor seen
+/// under a seat).
+fn hidden_centres(
+    map: &HeightMap,
+    b: &Bounds,
+    hull: &Hull,
+    radius: usize,
+    floor_top: Option<f64>,
+) -> Vec<(usize, usize)> {
+    let open = |c| match (height(map, c), floor_top) {
+        (None, _) => true,
+        (Some(h), Some(top)) => h < top,
+        (Some(_), None) => false,
+    };
     let mut out = Vec::new();
     for y in b.y0..=b.y1 {
         for x in b.x0..=b.x1 {
             let c = (x, y);
-            if height(map, c).is_none()
-                && hull.contains(c)
-                && disc(map, c, radius).all(|n| height(map, n).is_none())
-            {
+            if open(c) && hull.contains(c) && disc(map, c, radius).all(open) {
                 out.push(c);
             }
         }
@@ -450,6 +523,60 @@ mod tests {
             (14, 15, 10, 19, 0.62),
         ];
         assert!(hidden_seats(&map_with(&narrow), &[], &HiddenConfig::default()).is_empty());
+    }
+
+    /// A `n` x `n` map of 0.05 m cells, the floor (0.0) seen everywhere but under the
+    /// `walls` given as `(x0, x1, y0, y1, height)` cell ranges, inclusive.
+    fn floor_map_with(n: usize, walls: &[(usize, usize, usize, usize, f64)]) -> HeightMap {
+        let mut h = vec![Some(0.0); n * n];
+        for &(x0, x1, y0, y1, z) in walls {
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    h[y * n + x] = Some(z);
+                }
+            }
+        }
+        HeightMap::from_dense(0.0, 0.0, 0.05, n, n, &h)
+    }
+
+    #[test]
+    fn an_armless_chair_seen_from_behind_is_filled_over_the_floor_under_its_seat() {
+        // A chair without arms seen from behind: its back 0.5 m wide (top at 0.85 m, its
+        // lower rail at 0.55 m), the seat's side edge (0.45 m) running 0.4 m forward from
+        // one end of it, and the floor seen everywhere else, under the seat too.
+        let chair = [
+            (10, 19, 10, 10, 0.85),
+            (10, 19, 11, 11, 0.55),
+            (19, 19, 12, 19, 0.45),
+        ];
+        let cfg = HiddenConfig::default();
+        let holes = hidden_seats(&floor_map_with(30, &chair), &[], &cfg);
+        assert_eq!(holes.len(), 1);
+        assert!(holes[0].cells.contains(&(15, 15)));
+        // Under the walls' lowest tenth (the back's rail), as for arms.
+        assert!((holes[0].height - 0.40).abs() < 1e-9);
+        // The floor counts only as far as the seat's edge shows a seat: with the floor
+        // not counted, or without the edge, or the walls and the edge spanning more than
+        // a seat (two 1.3 m walls of a room meeting at a corner, a bench along one),
+        // nothing is filled.
+        let no_floor = HiddenConfig {
+            floor_top: 0.0,
+            ..cfg
+        };
+        assert!(hidden_seats(&floor_map_with(30, &chair), &[], &no_floor).is_empty());
+        let no_edge = [chair[0], chair[1], (19, 19, 12, 19, 0.85)];
+        assert!(hidden_seats(&floor_map_with(30, &no_edge), &[], &cfg).is_empty());
+        let corner = [
+            (2, 27, 2, 2, 0.85),
+            (2, 2, 3, 27, 0.85),
+            (3, 27, 3, 3, 0.45),
+        ];
+        assert!(hidden_seats(&floor_map_with(30, &corner), &[], &cfg).is_empty());
+        let wide = HiddenConfig {
+            max_span: 1.5,
+            ..cfg
+        };
+        assert!(!hidden_seats(&floor_map_with(30, &corner), &[], &wide).is_empty());
     }
 
     #[test]
