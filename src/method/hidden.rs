@@ -135,6 +135,7 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
     let radius = cells(cfg.clear);
     let deepest = to_usize((cfg.max_half_width / map.cell + 1e-9).floor());
     let mut walls = Bits::new(map);
+    let mut scratch = Bits::new(map);
     let mut candidates: Vec<Candidate> = Vec::new();
     for start in map.cells_at_least(cfg.wall_low) {
         if walls.get(start) || !height(map, start).is_some_and(is_wall) {
@@ -147,7 +148,7 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
         }
         // A seat's side edges joined to the walls widen the place they hold; where they
         // show a seat no wider across than one, the floor under it counts as unseen.
-        let edges = seat_edges(map, &comp, cfg, deepest);
+        let edges = seat_edges(map, &comp, cfg, deepest, &mut scratch);
         let mut shape = comp.clone();
         shape.extend_from_slice(&edges);
         let outline = Bounds::of(&shape);
@@ -264,22 +265,25 @@ fn height(map: &HeightMap, (x, y): (usize, usize)) -> Option<f64> {
 /// component `comp` through sides and corners (seat edges, and what joins them at their
 /// height), if they are no thicker than `deepest` cells from their edge (see
 /// [`half_width`]); none where they are thicker (a seat the scan saw, a low table).
+/// `marks` is scratch space, all clear on entry and on return.
 fn seat_edges(
     map: &HeightMap,
     comp: &[(usize, usize)],
     cfg: &HiddenConfig,
     deepest: usize,
+    marks: &mut Bits,
 ) -> Vec<(usize, usize)> {
     let is_edge = |h: f64| (cfg.edge_low..cfg.wall_low).contains(&h);
-    let mut marks = Bits::new(map);
     let mut edges = Vec::new();
     for &c in comp {
         for n in (-1..=1).flat_map(|dy| (-1..=1).filter_map(move |dx| beside(map, c, (dx, dy)))) {
             if !marks.get(n) && height(map, n).is_some_and(is_edge) {
-                marks.set(n, true);
-                edges.extend(component(map, n, &is_edge, &mut marks));
+                edges.extend(component(map, n, &is_edge, marks));
             }
         }
+    }
+    for &e in &edges {
+        marks.set(e, false);
     }
     if edges.is_empty() || half_width(&edges, &Bounds::of(&edges)) > deepest {
         return Vec::new();
@@ -445,13 +449,17 @@ mod tests {
     /// (y 0-3, at 0) and the `walls` given as `(x0, x1, y0, y1, height)` cell ranges,
     /// inclusive.
     fn map_with(walls: &[(usize, usize, usize, usize, f64)]) -> HeightMap {
+        painted(|_, y| (y < 4).then_some(0.0), walls)
+    }
+
+    /// A 30 x 30 map of 0.05 m cells, `(x, y)` at `base(x, y)`, with the `walls` given as
+    /// `(x0, x1, y0, y1, height)` cell ranges, inclusive, painted over it.
+    fn painted(
+        base: impl Fn(usize, usize) -> Option<f64>,
+        walls: &[(usize, usize, usize, usize, f64)],
+    ) -> HeightMap {
         let n = 30;
-        let mut h = vec![None; n * n];
-        for y in 0..4 {
-            for x in 0..n {
-                h[y * n + x] = Some(0.0);
-            }
-        }
+        let mut h: Vec<Option<f64>> = (0..n * n).map(|i| base(i % n, i / n)).collect();
         for &(x0, x1, y0, y1, z) in walls {
             for y in y0..=y1 {
                 for x in x0..=x1 {
@@ -525,18 +533,9 @@ mod tests {
         assert!(hidden_seats(&map_with(&narrow), &[], &HiddenConfig::default()).is_empty());
     }
 
-    /// A `n` x `n` map of 0.05 m cells, the floor (0.0) seen everywhere but under the
-    /// `walls` given as `(x0, x1, y0, y1, height)` cell ranges, inclusive.
-    fn floor_map_with(n: usize, walls: &[(usize, usize, usize, usize, f64)]) -> HeightMap {
-        let mut h = vec![Some(0.0); n * n];
-        for &(x0, x1, y0, y1, z) in walls {
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    h[y * n + x] = Some(z);
-                }
-            }
-        }
-        HeightMap::from_dense(0.0, 0.0, 0.05, n, n, &h)
+    /// A 30 x 30 map of 0.05 m cells, the floor (0.0) seen everywhere but under `walls`.
+    fn floor_map_with(walls: &[(usize, usize, usize, usize, f64)]) -> HeightMap {
+        painted(|_, _| Some(0.0), walls)
     }
 
     #[test]
@@ -550,7 +549,7 @@ mod tests {
             (19, 19, 12, 19, 0.45),
         ];
         let cfg = HiddenConfig::default();
-        let holes = hidden_seats(&floor_map_with(30, &chair), &[], &cfg);
+        let holes = hidden_seats(&floor_map_with(&chair), &[], &cfg);
         assert_eq!(holes.len(), 1);
         assert!(holes[0].cells.contains(&(15, 15)));
         // Under the walls' lowest tenth (the back's rail), as for arms.
@@ -563,20 +562,20 @@ mod tests {
             floor_top: 0.0,
             ..cfg
         };
-        assert!(hidden_seats(&floor_map_with(30, &chair), &[], &no_floor).is_empty());
+        assert!(hidden_seats(&floor_map_with(&chair), &[], &no_floor).is_empty());
         let no_edge = [chair[0], chair[1], (19, 19, 12, 19, 0.85)];
-        assert!(hidden_seats(&floor_map_with(30, &no_edge), &[], &cfg).is_empty());
+        assert!(hidden_seats(&floor_map_with(&no_edge), &[], &cfg).is_empty());
         let corner = [
             (2, 27, 2, 2, 0.85),
             (2, 2, 3, 27, 0.85),
             (3, 27, 3, 3, 0.45),
         ];
-        assert!(hidden_seats(&floor_map_with(30, &corner), &[], &cfg).is_empty());
+        assert!(hidden_seats(&floor_map_with(&corner), &[], &cfg).is_empty());
         let wide = HiddenConfig {
             max_span: 1.5,
             ..cfg
         };
-        assert!(!hidden_seats(&floor_map_with(30, &corner), &[], &wide).is_empty());
+        assert!(!hidden_seats(&floor_map_with(&corner), &[], &wide).is_empty());
     }
 
     #[test]
