@@ -24,7 +24,11 @@
 //! where the seat is the map holds the floor, seen from behind under the seat. Such strips
 //! joined to the walls widen the hull the place is looked for in, and where one is joined
 //! and the walls and strips span no more across than a seat, the floor inside counts as
-//! unseen too: two walls of a room meeting at a corner span the room.
+//! unseen too: two walls of a room meeting at a corner span the room. Seen from behind
+//! and a little from the side, part of such a seat shows beside its back, too near the
+//! floor under the rest for a place clear of everything but the floor: then the places
+//! may hold the seat seen (not at their centre), and the rest is filled at its height,
+//! where the walls rise above it as a back does.
 //!
 //! The fill is as for holes ([`crate::method::holes::fill`],
 //! [`crate::method::holes::fill_points`]): the cells set in the height map and points
@@ -69,6 +73,10 @@ pub struct HiddenConfig {
     /// ... only where the walls and the edges span at most this across, metres (the
     /// shorter side of their box).
     pub max_span: f64,
+    /// Where such walls hide no place clear of everything seen but the floor, a place
+    /// whose disc also holds the seat's edges (a seat seen in part) is filled at their
+    /// height, if the walls' highest tenth rises at least this many metres above it.
+    pub back_rise: f64,
 }
 
 impl Default for HiddenConfig {
@@ -114,6 +122,11 @@ impl Default for HiddenConfig {
             // corner span the room (a wide-mix room scan was lain on along its walls with
             // no bound, and along a 0.6 m band with places kept within 0.6 m of the walls).
             max_span: 1.00,
+            // 0.20 m: a back holds the trunk at the lumbar spine or above, 0.15-0.25 m over
+            // the seat, and chairs' backs rise 0.30-0.55 m over it; a night stand's top
+            // stands 0.05-0.10 m over its side seen at seat height (two wide-mix night
+            // stands were sat in without this).
+            back_rise: 0.20,
         }
     }
 }
@@ -158,19 +171,34 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
         let across = (outline.x1 - outline.x0 + 1).min(outline.y1 - outline.y0 + 1);
         let floor_top = (!edges.is_empty() && across as f64 * map.cell <= cfg.max_span + 1e-9)
             .then_some(cfg.floor_top);
-        let centres = hidden_centres(map, &outline, &hull, radius, floor_top);
+        let heights = sorted_heights(map, &comp);
+        let quantile = |q: f64| heights[to_usize((q * (heights.len() - 1) as f64).round())];
+        let strict = Open {
+            floor_top,
+            edges: None,
+        };
+        let mut centres = hidden_centres(map, &outline, &hull, radius, strict);
+        let mut open = strict;
+        let mut level = quantile(cfg.level_quantile) - cfg.drop;
+        // No such place, but the seat seen in part beside one: the places may hold the
+        // seat's edges too (not at their centre), and the seat is at the edges' height.
+        if centres.is_empty() && floor_top.is_some() {
+            let seat = sorted_heights(map, &edges);
+            let seat = seat[seat.len() / 2];
+            if quantile(1.0 - cfg.level_quantile) - seat >= cfg.back_rise - 1e-9 {
+                open.edges = Some((cfg.edge_low, cfg.wall_low));
+                centres = hidden_centres(map, &outline, &hull, radius, open);
+                level = seat;
+            }
+        }
         if centres.is_empty() {
             continue;
         }
-        let mut heights: Vec<f64> = comp.iter().filter_map(|&c| height(map, c)).collect();
-        heights.sort_by(f64::total_cmp);
-        let q = to_usize((cfg.level_quantile * (heights.len() - 1) as f64).round());
-        let level = heights[q.min(heights.len() - 1)] - cfg.drop;
-        let middle = heights[heights.len() / 2];
         candidates.push(Candidate {
             centres,
+            open,
             level,
-            middle,
+            middle: quantile(0.5),
         });
     }
     if candidates.is_empty() {
@@ -201,6 +229,7 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
     let mut out = Vec::new();
     for Candidate {
         centres,
+        open,
         level,
         middle,
     } in candidates
@@ -214,7 +243,8 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
             if disc(map, c, radius).any(surface) {
                 continue;
             }
-            for n in disc(map, c, radius) {
+            // The seat's edges the place holds were seen: they stay as they are.
+            for n in disc(map, c, radius).filter(|&n| open.centre(map, n)) {
                 if !taken.get(n) {
                     taken.set(n, true);
                     cells.push(n);
@@ -237,6 +267,8 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
 struct Candidate {
     /// The places' centres, row by row.
     centres: Vec<(usize, usize)>,
+    /// Which seen cells the places may hold.
+    open: Open,
     /// The seat's height, metres: the walls' level less `drop`.
     level: f64,
     /// The walls' middle height (their median), metres.
@@ -254,6 +286,44 @@ fn disc(
         .flat_map(move |dy| (-r..=r).map(move |dx| (dx, dy)))
         .filter(move |&(dx, dy)| dx * dx + dy * dy <= r * r)
         .filter_map(move |d| beside(map, c, d))
+}
+
+/// The heights of the seen cells among `cells`, ascending (not empty for the cells of a
+/// component, which are seen).
+fn sorted_heights(map: &HeightMap, cells: &[(usize, usize)]) -> Vec<f64> {
+    let mut h: Vec<f64> = cells.iter().filter_map(|&c| height(map, c)).collect();
+    h.sort_by(f64::total_cmp);
+    h
+}
+
+/// Which cells of the map a hidden place may hold.
+#[derive(Debug, Clone, Copy)]
+struct Open {
+    /// Cells whose top is lower than this, metres (the floor seen under a seat), count as
+    /// unseen.
+    floor_top: Option<f64>,
+    /// Cells between these heights, metres (low inclusive; a seat's edges, seen), may lie
+    /// in a place, though not at its centre.
+    edges: Option<(f64, f64)>,
+}
+
+impl Open {
+    /// Whether cell `c` counts as unseen: a place may be centred on it, and is filled there.
+    fn centre(&self, map: &HeightMap, c: (usize, usize)) -> bool {
+        match (height(map, c), self.floor_top) {
+            (None, _) => true,
+            (Some(h), Some(top)) => h < top,
+            (Some(_), None) => false,
+        }
+    }
+
+    /// Whether cell `c` may lie in a place.
+    fn held(&self, map: &HeightMap, c: (usize, usize)) -> bool {
+        self.centre(map, c)
+            || self
+                .edges
+                .is_some_and(|(lo, hi)| height(map, c).is_some_and(|h| (lo..hi).contains(&h)))
+    }
 }
 
 /// The height of cell `(x, y)`, if the scan saw it.
@@ -413,27 +483,24 @@ impl Hull {
     }
 }
 
-/// The centres of the hidden places inside `hull` (within `b`): the unseen cells with no
-/// seen cell within `radius` cells (the map's border counts as unseen), row by row. With
-/// `floor_top`, a cell whose top is lower than that counts as unseen (the floor seen
-/// under a seat).
+/// The centres of the hidden places inside `hull` (within `b`): the cells counting as
+/// unseen under `open` with nothing within `radius` cells but cells `open` lets a place
+/// hold (the map's border counts as unseen), row by row.
 fn hidden_centres(
     map: &HeightMap,
     b: &Bounds,
     hull: &Hull,
     radius: usize,
-    floor_top: Option<f64>,
+    open: Open,
 ) -> Vec<(usize, usize)> {
-    let open = |c| match (height(map, c), floor_top) {
-        (None, _) => true,
-        (Some(h), Some(top)) => h < top,
-        (Some(_), None) => false,
-    };
     let mut out = Vec::new();
     for y in b.y0..=b.y1 {
         for x in b.x0..=b.x1 {
             let c = (x, y);
-            if open(c) && hull.contains(c) && disc(map, c, radius).all(open) {
+            if open.centre(map, c)
+                && hull.contains(c)
+                && disc(map, c, radius).all(|n| open.held(map, n))
+            {
                 out.push(c);
             }
         }
@@ -576,6 +643,41 @@ mod tests {
             ..cfg
         };
         assert!(!hidden_seats(&floor_map_with(&corner), &[], &wide).is_empty());
+    }
+
+    #[test]
+    fn a_seat_seen_in_part_beside_its_back_is_filled_at_its_height_over_the_floor() {
+        // A chair without arms seen from behind and a little from the side: its back and
+        // rail as above, the seat seen as a strip 0.20 m wide along its far side (0.45 m),
+        // and the floor seen under the rest of it. No place 0.15 m clear of everything
+        // but the floor fits between the rail and the strip.
+        let chair = [
+            (10, 19, 10, 10, 0.85),
+            (10, 19, 11, 11, 0.55),
+            (16, 19, 12, 19, 0.45),
+        ];
+        let cfg = HiddenConfig::default();
+        let map = floor_map_with(&chair);
+        let holes = hidden_seats(&map, &[], &cfg);
+        assert_eq!(holes.len(), 1);
+        // At the height of the seat seen, over the floor beside it; the seat seen and the
+        // walls are left as they are.
+        assert!((holes[0].height - 0.45).abs() < 1e-9);
+        assert!(holes[0].cells.contains(&(14, 15)));
+        assert!(holes[0]
+            .cells
+            .iter()
+            .all(|&c| height(&map, c).is_some_and(|h| h < cfg.floor_top)));
+        // Walls hardly higher than the seat (a night stand's top, 0.55 m, over its side
+        // seen at 0.45 m) are no back: nothing is filled, unless the rise asked is lower.
+        let stand = [(10, 19, 10, 11, 0.55), (16, 19, 12, 19, 0.45)];
+        let map = floor_map_with(&stand);
+        assert!(hidden_seats(&map, &[], &cfg).is_empty());
+        let low_rise = HiddenConfig {
+            back_rise: 0.05,
+            ..cfg
+        };
+        assert!(!hidden_seats(&map, &[], &low_rise).is_empty());
     }
 
     #[test]
