@@ -339,7 +339,8 @@ impl NodeContext<'_> {
 
     /// `release`: whether the parts of `parts` that touch the scene are held from the side
     /// opposite the node's release direction (agent frame, turned by the heading), within
-    /// the hierarchy's support angle. True when the node has no release direction.
+    /// the node's `release_angle`, else the hierarchy's support angle. True when the node
+    /// has no release direction.
     pub fn release(&self, parts: &[Cylinder]) -> bool {
         let Some(release) = self.node.release else {
             return true;
@@ -349,9 +350,9 @@ impl NodeContext<'_> {
                 * release)
                 .normalize();
         parts.iter().filter(|c| self.scene.touches(c)).all(|c| {
-            self.scene
-                .contact_normal(c)
-                .is_some_and(|n| n.dot(&dir) >= self.h.score.support_cos)
+            self.scene.contact_normal(c).is_some_and(|n| {
+                n.dot(&dir) >= self.node.release_cos.unwrap_or(self.h.score.support_cos)
+            })
         })
     }
 
@@ -1494,6 +1495,41 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         let mut none = node.clone();
         none.release = None;
         assert!(with(&a, &h, &s, &p, &none).release(&[at_side]));
+    }
+
+    #[test]
+    fn a_nodes_release_angle_overrides_the_hierarchys() {
+        let (a, h) = models();
+        let s = box_scene();
+        let p = place(1.0);
+        let r = 0.02;
+        // Along the top's front edge, 1 cm into the corner: the scene's normal there leans
+        // forward from up, between the top's and the side's.
+        let on_edge = Cylinder {
+            joint: 1,
+            a: Point3::new(0.61 + r - 0.01, -0.15, 0.46 + r - 0.01),
+            b: Point3::new(0.61 + r - 0.01, 0.15, 0.46 + r - 0.01),
+            radius: r,
+        };
+        assert!(s.intersects(&on_edge));
+        let n = s.contact_normal(&on_edge).expect("a normal at the edge");
+        let tilt = n.z.clamp(-1.0, 1.0).acos();
+        assert!(tilt > 10f64.to_radians() && tilt < 80f64.to_radians());
+        let mut node = h.nodes[0].clone();
+        node.release = Some(Vector3::z());
+        let wide = (tilt + 5f64.to_radians()).cos();
+        let narrow = (tilt - 5f64.to_radians()).cos();
+        node.release_cos = Some(wide);
+        assert!(with(&a, &h, &s, &p, &node).release(&[on_edge]));
+        node.release_cos = Some(narrow);
+        assert!(!with(&a, &h, &s, &p, &node).release(&[on_edge]));
+        // Without one, the hierarchy's support angle decides.
+        node.release_cos = None;
+        let mut h2 = h.clone();
+        h2.score.support_cos = narrow;
+        assert!(!with(&a, &h2, &s, &p, &node).release(&[on_edge]));
+        h2.score.support_cos = wide;
+        assert!(with(&a, &h2, &s, &p, &node).release(&[on_edge]));
     }
 
     #[test]

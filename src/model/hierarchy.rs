@@ -265,6 +265,10 @@ pub struct Node {
     /// opposite this direction (agent frame: x forward, z up): `[0, 0, 1]` means "from
     /// below", so an armrest counts and a wall beside the arm does not.
     pub release: Option<nalgebra::Vector3<f64>>,
+    /// Cosine of the largest angle between a contact's normal and `release` for this
+    /// node, where it is narrower or wider than the hierarchy's
+    /// ([`ScoreRule::support_cos`]); `None` keeps the hierarchy's.
+    pub release_cos: Option<f64>,
     /// Whether a contact already at theta1 is refused: the links had no room to unfold
     /// (shanks that start in a mattress are not hanging from a seat).
     pub free_start: bool,
@@ -550,6 +554,8 @@ struct NodeFile {
     clamp: Vec<ClampFile>,
     #[serde(default)]
     release: Option<[f64; 3]>,
+    #[serde(default)]
+    release_angle: Option<f64>,
     #[serde(default)]
     free_start: bool,
     #[serde(default)]
@@ -1490,6 +1496,21 @@ fn resolve_node(
         }
         r => r,
     };
+    let release_cos = match n.release_angle {
+        Some(_) if release.is_none() => {
+            return Err(src.invalid(
+                &key.key("release_angle"),
+                "needs `release`, the direction it is measured from",
+            ))
+        }
+        Some(a) if !(0.0..=180.0).contains(&a) => {
+            return Err(src.invalid(
+                &key.key("release_angle"),
+                format!("must be 0-180 degrees, not {a}"),
+            ))
+        }
+        a => a.map(|a| a.to_radians().cos()),
+    };
     Ok(Node {
         id: n.id.clone(),
         parent,
@@ -1501,6 +1522,7 @@ fn resolve_node(
         fallbacks,
         clamps,
         release,
+        release_cos,
         free_start: n.free_start,
         contact: n.contact,
         support,
@@ -2157,6 +2179,32 @@ mod tests {
         names(&e, line, "node.armrest.beside.over", "unknown link `lap`");
         let (e, line) = edited(rule, "beside = { gap = 1.5, over = \"thigh_l\" }");
         names(&e, line, "node.armrest.beside.gap", "under 1 metre");
+    }
+
+    #[test]
+    fn a_bad_release_angle_is_named() {
+        let rule = "release_angle = 30.0";
+        assert_eq!(BUILTIN_SITTING.matches(rule).count(), 1);
+        let h = load(BUILTIN_SITTING).unwrap();
+        let armrest = &h.nodes[1];
+        assert_eq!(armrest.id, "armrest");
+        let cos = armrest.release_cos.expect("the armrest's own angle");
+        assert!((cos - 30f64.to_radians().cos()).abs() < 1e-12);
+        // The other nodes keep the hierarchy's support angle.
+        assert!(h.nodes[2..].iter().all(|n| n.release_cos.is_none()));
+        let (e, line) = edited(rule, "release_angle = 200.0");
+        names(&e, line, "node.armrest.release_angle", "0-180 degrees");
+        let bad = BUILTIN_SITTING.replace(rule, "").replace(
+            "free_start = true",
+            "free_start = true\nrelease_angle = 20.0",
+        );
+        let line = line_of(&bad, "release_angle = 20.0", 0);
+        names(
+            &error(&bad),
+            line,
+            "node.sitting.release_angle",
+            "needs `release`",
+        );
     }
 
     #[test]
