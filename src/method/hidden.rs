@@ -136,11 +136,16 @@ impl Default for HiddenConfig {
 /// thin, the hidden places inside its convex hull (cells the scan did not see, with
 /// none seen within `clear`, and over none of which the highest point of `seen` lies at
 /// the walls' middle height, give or take `surface_tolerance`), each grown to the disc of
-/// radius `clear` round it, at the walls' level less `drop`. `seen` is every point the
-/// scan saw, world frame: also the specks left out of the map, so that a sparse top seen at a grazing angle, whose scattered points are
-/// specks, is not taken for a space the scan never saw. Components are taken in the
-/// order of [`HeightMap::cells_at_least`]; a cell two of them would fill goes to the
-/// first, so the answer is deterministic. Run on the map with its holes filled.
+/// radius `clear` round it, at the walls' level less `drop`. With a seat's edges joined
+/// and a span of at most `max_span`, the floor counts as unseen; and where that still
+/// leaves no place, places may also hold the edges (not at their centre), their floor and
+/// unseen cells filled at the edges' median height if the walls' highest tenth rises
+/// `back_rise` above it (a seat seen in part beside its back). `seen` is every point the
+/// scan saw, world frame: also the specks left out of the map, so that a sparse top seen
+/// at a grazing angle, whose scattered points are specks, is not taken for a space the
+/// scan never saw. Components are taken in the order of [`HeightMap::cells_at_least`]; a
+/// cell two of them would fill goes to the first, so the answer is deterministic. Run on
+/// the map with its holes filled.
 pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -> Vec<Hole> {
     let is_wall = |h: f64| (cfg.wall_low..=cfg.wall_high).contains(&h);
     // Lengths in whole cells; the small offset keeps 0.15 / 0.05 at 3, not 4.
@@ -269,7 +274,8 @@ struct Candidate {
     centres: Vec<(usize, usize)>,
     /// Which seen cells the places may hold.
     open: Open,
-    /// The seat's height, metres: the walls' level less `drop`.
+    /// The seat's height, metres: the walls' level less `drop`, or the height of the
+    /// seat's edges the places hold.
     level: f64,
     /// The walls' middle height (their median), metres.
     middle: f64,
