@@ -75,7 +75,8 @@ pub struct HiddenConfig {
     pub max_span: f64,
     /// Where such walls hide no place clear of everything seen but the floor, a place
     /// whose disc also holds the seat's edges (a seat seen in part) is filled at their
-    /// height, if the walls' highest tenth rises at least this many metres above it.
+    /// height, if the walls' highest tenth (the quantile `1 - level_quantile`, the mirror
+    /// of their level) rises at least this many metres above it.
     pub back_rise: f64,
 }
 
@@ -176,13 +177,16 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
         let across = (outline.x1 - outline.x0 + 1).min(outline.y1 - outline.y0 + 1);
         let floor_top = (!edges.is_empty() && across as f64 * map.cell <= cfg.max_span + 1e-9)
             .then_some(cfg.floor_top);
-        let heights = sorted_heights(map, &comp);
-        let quantile = |q: f64| heights[to_usize((q * (heights.len() - 1) as f64).round())];
         let strict = Open {
             floor_top,
             edges: None,
         };
         let mut centres = hidden_centres(map, &outline, &hull, radius, strict);
+        if centres.is_empty() && floor_top.is_none() {
+            continue;
+        }
+        let heights = sorted_heights(map, &comp);
+        let quantile = |q: f64| heights[to_usize((q * (heights.len() - 1) as f64).round())];
         let mut open = strict;
         let mut level = quantile(cfg.level_quantile) - cfg.drop;
         // No such place, but the seat seen in part beside one: the places may hold the
@@ -611,16 +615,17 @@ mod tests {
         painted(|_, _| Some(0.0), walls)
     }
 
+    /// The back of a chair without arms seen from behind: 0.5 m wide, its top at 0.85 m
+    /// and its lower rail at 0.55 m.
+    const ARMLESS_BACK: [(usize, usize, usize, usize, f64); 2] =
+        [(10, 19, 10, 10, 0.85), (10, 19, 11, 11, 0.55)];
+
     #[test]
     fn an_armless_chair_seen_from_behind_is_filled_over_the_floor_under_its_seat() {
-        // A chair without arms seen from behind: its back 0.5 m wide (top at 0.85 m, its
-        // lower rail at 0.55 m), the seat's side edge (0.45 m) running 0.4 m forward from
-        // one end of it, and the floor seen everywhere else, under the seat too.
-        let chair = [
-            (10, 19, 10, 10, 0.85),
-            (10, 19, 11, 11, 0.55),
-            (19, 19, 12, 19, 0.45),
-        ];
+        // A chair without arms seen from behind: its back, the seat's side edge (0.45 m)
+        // running 0.4 m forward from one end of it, and the floor seen everywhere else,
+        // under the seat too.
+        let chair = [ARMLESS_BACK[0], ARMLESS_BACK[1], (19, 19, 12, 19, 0.45)];
         let cfg = HiddenConfig::default();
         let holes = hidden_seats(&floor_map_with(&chair), &[], &cfg);
         assert_eq!(holes.len(), 1);
@@ -653,15 +658,11 @@ mod tests {
 
     #[test]
     fn a_seat_seen_in_part_beside_its_back_is_filled_at_its_height_over_the_floor() {
-        // A chair without arms seen from behind and a little from the side: its back and
-        // rail as above, the seat seen as a strip 0.20 m wide along its far side (0.45 m),
-        // and the floor seen under the rest of it. No place 0.15 m clear of everything
-        // but the floor fits between the rail and the strip.
-        let chair = [
-            (10, 19, 10, 10, 0.85),
-            (10, 19, 11, 11, 0.55),
-            (16, 19, 12, 19, 0.45),
-        ];
+        // A chair without arms seen from behind and a little from the side: its back, the
+        // seat seen as a strip 0.20 m wide along its far side (0.45 m), and the floor seen
+        // under the rest of it. No place 0.15 m clear of everything but the floor fits
+        // between the rail and the strip.
+        let chair = [ARMLESS_BACK[0], ARMLESS_BACK[1], (16, 19, 12, 19, 0.45)];
         let cfg = HiddenConfig::default();
         let map = floor_map_with(&chair);
         let holes = hidden_seats(&map, &[], &cfg);
