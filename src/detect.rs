@@ -222,10 +222,7 @@ fn prepare_spaced(
         };
     }
     let fill_at = fill_points(&map, &found, cfg.scene.voxel_size);
-    let mut points = Vec::with_capacity(cloud.len() + fill_at.len());
-    points.extend_from_slice(&cloud.points);
-    points.extend(fill_at);
-    let scene = Scene::new(&PointCloud::new(points), &cfg.scene);
+    let scene = scene.with_points(cloud, &fill_at, &cfg.scene);
     Prepared {
         map,
         scene,

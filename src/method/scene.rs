@@ -82,11 +82,43 @@ pub fn field_bytes(extent: [f64; 3], cfg: &SceneConfig, reach: f64) -> f64 {
 impl Scene {
     /// Voxelises `cloud` (world frame, metres).
     pub fn new(cloud: &PointCloud, cfg: &SceneConfig) -> Scene {
+        let origin = origin_of(cloud.bounds(), cfg.voxel_size);
+        Scene::of_keys(occupied_keys(cloud, origin, cfg.voxel_size), origin, cfg)
+    }
+
+    /// The scene of `cloud` and the points `more` together (world frame, metres), from
+    /// `self`, the scene of `cloud` alone under the same `cfg`: the same scene as
+    /// [`Scene::new`] of all the points. Where `more` leaves the local origin where it was
+    /// (points inside the cloud's bounds, as the holes and hidden seats filled), their
+    /// voxels are merged into `self`'s rather than every point's voxel found and sorted
+    /// again; else the scene is built anew.
+    pub fn with_points(
+        &self,
+        cloud: &PointCloud,
+        more: &[Point3<f64>],
+        cfg: &SceneConfig,
+    ) -> Scene {
         let v = cfg.voxel_size;
-        let origin = cloud.bounds().map_or(Vector3::zeros(), |(lo, hi)| {
-            ((lo.coords + hi.coords) / 2.0).map(|c| (c / v).round() * v)
-        });
-        let keys = occupied_keys(cloud, origin, v);
+        let bounds = |pts: &[Point3<f64>]| PointCloud::new(pts.to_vec()).bounds();
+        let all = match (cloud.bounds(), bounds(more)) {
+            (Some((a, b)), Some((c, d))) => Some((a.inf(&c), b.sup(&d))),
+            (a, c) => a.or(c),
+        };
+        let origin = origin_of(all, v);
+        if origin != self.origin || v != self.voxel {
+            let mut points = Vec::with_capacity(cloud.len() + more.len());
+            points.extend_from_slice(&cloud.points);
+            points.extend_from_slice(more);
+            return Scene::new(&PointCloud::new(points), cfg);
+        }
+        let added = occupied_keys(&PointCloud::new(more.to_vec()), origin, v);
+        Scene::of_keys(merge_keys(&self.keys(), &added), origin, cfg)
+    }
+
+    /// The scene of the occupied voxel `keys` (sorted by [`zyx`], each once) of edge
+    /// `cfg.voxel_size` from `origin` (world, metres).
+    fn of_keys(keys: Vec<[i64; 3]>, origin: Vector3<f64>, cfg: &SceneConfig) -> Scene {
+        let v = cfg.voxel_size;
         if keys.is_empty() {
             return Scene {
                 voxel: v,
@@ -127,6 +159,28 @@ impl Scene {
             occupied,
             count: keys.len(),
         }
+    }
+
+    /// The occupied voxels' keys, sorted by [`zyx`]: read back from the distance field's
+    /// rows, which hold them in that order.
+    fn keys(&self) -> Vec<[i64; 3]> {
+        let Some(field) = &self.field else {
+            return Vec::new();
+        };
+        let ny = field.dims[1] as u64;
+        let mut keys = Vec::with_capacity(self.count);
+        for (r, &id) in field.rows.iter().enumerate() {
+            // Row ids are `z * ny + y` of the box, so both fit i64.
+            let (y, z) = ((id % ny) as i64, (id / ny) as i64);
+            for &x in &field.xs[field.row_start[r]..field.row_start[r + 1]] {
+                keys.push([
+                    field.min[0] + i64::from(x),
+                    field.min[1] + y,
+                    field.min[2] + z,
+                ]);
+            }
+        }
+        keys
     }
 
     /// Number of occupied voxels.
@@ -1205,11 +1259,47 @@ fn cell_of(l: &Vector3<f64>) -> [i64; 3] {
     [floor_i64(l.x), floor_i64(l.y), floor_i64(l.z)]
 }
 
+/// The local origin of a scene over points with `bounds` (world, metres): their box's
+/// centre rounded to a multiple of the voxel edge `v` (the origin without points).
+fn origin_of(bounds: Option<(Point3<f64>, Point3<f64>)>, v: f64) -> Vector3<f64> {
+    bounds.map_or(Vector3::zeros(), |(lo, hi)| {
+        ((lo.coords + hi.coords) / 2.0).map(|c| (c / v).round() * v)
+    })
+}
+
+/// The keys of `a` and `b` (each sorted by [`zyx`], each key once) together, sorted by
+/// [`zyx`], each once.
+fn merge_keys(a: &[[i64; 3]], b: &[[i64; 3]]) -> Vec<[i64; 3]> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        match zyx(&a[i]).cmp(&zyx(&b[j])) {
+            std::cmp::Ordering::Less => {
+                out.push(a[i]);
+                i += 1;
+            }
+            std::cmp::Ordering::Greater => {
+                out.push(b[j]);
+                j += 1;
+            }
+            std::cmp::Ordering::Equal => {
+                out.push(a[i]);
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[j..]);
+    out
+}
+
 /// The voxels holding a point of `cloud` (world frame, metres): the keys (cells of edge
-/// `v` from `origin`, [`cell_of`]) sorted and each once. A point in the voxel of the point
+/// `v` from `origin`, [`cell_of`]) sorted by [`zyx`] and each once. A point in the voxel of the point
 /// before it (a run of points in one voxel, as a depth image's rows give) adds no key, so
 /// fewer keys are sorted: the same keys as sorting every point's and removing repeats
-/// (test `occupied_keys_are_the_sorted_distinct_keys`), in no more memory.
+/// (test `occupied_keys_are_the_sorted_distinct_keys`), in no more memory. In that order
+/// the distance field's rows along x ([`DistanceField::new`]) come sorted already.
 fn occupied_keys(cloud: &PointCloud, origin: Vector3<f64>, v: f64) -> Vec<[i64; 3]> {
     // Room for every point's key, as before; only the pages written are resident.
     let mut keys: Vec<[i64; 3]> = Vec::with_capacity(cloud.len());
@@ -1230,19 +1320,25 @@ const RADIX_MIN_KEYS: usize = 1 << 12;
 /// Bits of a packed key sorted per radix pass: 2^11 counts (16 KiB) stay in the L1 cache.
 const RADIX_BITS: u32 = 11;
 
-/// Sorts voxel keys lexicographically (x, then y, then z), as `sort_unstable` does.
+/// The order voxel keys are sorted in: by z, then y, then x (the order of the distance
+/// field's rows along x, `z * ny + y`, and of the cells within a row).
+fn zyx(k: &[i64; 3]) -> [i64; 3] {
+    [k[2], k[1], k[0]]
+}
+
+/// Sorts voxel keys by [`zyx`], as `sort_unstable_by_key(zyx)` does.
 ///
 /// When the keys' spans along the three axes fit 64 bits together, each key is packed
-/// into a `u64` (its offsets from the least key along each axis, x in the high bits, z in
-/// the low bits), whose order is the keys' lexicographic order, and the packed keys are
+/// into a `u64` (its offsets from the least key along each axis, z in the high bits, x in
+/// the low bits), whose order is the keys' [`zyx`] order, and the packed keys are
 /// sorted by a least-significant-digit radix sort ([`RADIX_BITS`] a pass, only as many
 /// passes as the packed keys have bits) and unpacked in place; equal keys pack alike, so
-/// the result is the same sequence as `sort_unstable`'s (test
+/// the result is the same sequence as `sort_unstable_by_key`'s (test
 /// `sort_keys_equals_sort_unstable`). Fewer than [`RADIX_MIN_KEYS`] keys, or spans over 64
-/// bits, are sorted by `sort_unstable`.
+/// bits, are sorted by `sort_unstable_by_key`.
 fn sort_keys(keys: &mut [[i64; 3]]) {
     if keys.len() < RADIX_MIN_KEYS {
-        keys.sort_unstable();
+        keys.sort_unstable_by_key(zyx);
         return;
     }
     let mut lo = [i64::MAX; 3];
@@ -1258,15 +1354,15 @@ fn sort_keys(keys: &mut [[i64; 3]]) {
     let bits = [0, 1, 2].map(|a| u64::BITS - offset(&hi, a).leading_zeros());
     let total = bits[0] + bits[1] + bits[2];
     if total > u64::BITS {
-        keys.sort_unstable();
+        keys.sort_unstable_by_key(zyx);
         return;
     }
-    let (shift_x, shift_y) = (bits[1] + bits[2], bits[2]);
+    let (shift_z, shift_y) = (bits[1] + bits[0], bits[0]);
     // A shift of 64 only meets an offset of 0 bits, which is 0.
     let shl = |x: u64, s: u32| x.checked_shl(s).unwrap_or(0);
     let mut packed: Vec<u64> = keys
         .iter()
-        .map(|k| shl(offset(k, 0), shift_x) | shl(offset(k, 1), shift_y) | offset(k, 2))
+        .map(|k| shl(offset(k, 2), shift_z) | shl(offset(k, 1), shift_y) | offset(k, 0))
         .collect();
     radix_sort(&mut packed, total);
     let mask = |b: u32| shl(1, b).wrapping_sub(1);
@@ -1274,9 +1370,9 @@ fn sort_keys(keys: &mut [[i64; 3]]) {
     let unshr = |x: u64, s: u32| x.checked_shr(s).unwrap_or(0);
     for (k, &p) in keys.iter_mut().zip(&packed) {
         *k = [
-            lo[0].wrapping_add_unsigned(unshr(p, shift_x) & mx),
+            lo[0].wrapping_add_unsigned(p & mx),
             lo[1].wrapping_add_unsigned(unshr(p, shift_y) & my),
-            lo[2].wrapping_add_unsigned(p & mz),
+            lo[2].wrapping_add_unsigned(unshr(p, shift_z) & mz),
         ];
     }
 }
@@ -2131,12 +2227,12 @@ mod tests {
                 .iter()
                 .map(|p| cell_of(&((p.coords - origin) / v)))
                 .collect();
-            want.sort_unstable();
+            want.sort_unstable_by_key(zyx);
             want.dedup();
             assert_eq!(occupied_keys(&cloud, origin, v), want, "{round}");
         }
     }
-    /// `sort_keys` against `sort_unstable` on seeded key sets: small and large sets, narrow
+    /// `sort_keys` against `sort_unstable_by_key(zyx)` on seeded key sets: small and large sets, narrow
     /// and wide spans (up to exactly 64 bits together, and past them), negative keys,
     /// repeats, and keys at the ends of `i64`.
     #[test]
@@ -2180,7 +2276,7 @@ mod tests {
                 keys.push([i64::MAX, 0, 0]);
             }
             let mut want = keys.clone();
-            want.sort_unstable();
+            want.sort_unstable_by_key(zyx);
             sort_keys(&mut keys);
             assert_eq!(keys, want, "{round}");
         }
@@ -2191,7 +2287,7 @@ mod tests {
         keys.push([0, -65_535, 0]);
         keys.push([(1 << 23) - 1, 0, (1 << 25) - 1]);
         let mut want = keys.clone();
-        want.sort_unstable();
+        want.sort_unstable_by_key(zyx);
         sort_keys(&mut keys);
         assert_eq!(keys, want);
         let mut values: Vec<u64> = (0..10_000u64)
@@ -2865,6 +2961,59 @@ mod tests {
             }
         }
         Scene::new(&PointCloud::new(pts), &cfg(floor))
+    }
+
+    /// What two scenes hold, for comparing them: the local origin, the voxel count and
+    /// bounds, parry's box and the distance field's occupied rows.
+    fn contents(s: &Scene) -> String {
+        let field = s
+            .field
+            .as_ref()
+            .map(|f| (f.min, f.dims, &f.rows, &f.row_start, &f.xs));
+        format!(
+            "{:?} {} {:?} {:?} {:?} {}",
+            s.origin, s.count, s.occupied, s.parry_aabb, field, s.floor
+        )
+    }
+
+    /// Points added to a scene give the scene of all the points built at once: inside the
+    /// cloud's bounds (merged), beyond them (built anew), on voxels already occupied, and
+    /// to a scene without points.
+    #[test]
+    fn a_scene_with_points_added_is_the_scene_of_all_the_points() {
+        let mut state = 3u64;
+        for round in 0..40 {
+            let n = [0, 1, 500, 4000, 9000][round % 5];
+            let cloud: Vec<Point3<f64>> = (0..n)
+                .map(|_| {
+                    Point3::new(
+                        uniform(&mut state) * 2.0 - 1.0,
+                        uniform(&mut state) * 1.5,
+                        uniform(&mut state) * 0.9,
+                    )
+                })
+                .collect();
+            // Inside the bounds (most rounds), some on the cloud's own points, and past
+            // them every fourth round.
+            let reach = if round % 4 == 3 { 1.6 } else { 0.9 };
+            let mut more: Vec<Point3<f64>> = (0..1 + round * 30)
+                .map(|_| {
+                    Point3::new(
+                        (uniform(&mut state) * 2.0 - 1.0) * reach,
+                        0.1 + uniform(&mut state) * 1.2,
+                        0.05 + uniform(&mut state) * 0.7,
+                    )
+                })
+                .collect();
+            more.extend(cloud.iter().step_by(7).copied());
+            let mut all = cloud.clone();
+            all.extend_from_slice(&more);
+            let cloud = PointCloud::new(cloud);
+            let c = cfg(round % 2 == 0);
+            let added = Scene::new(&cloud, &c).with_points(&cloud, &more, &c);
+            let at_once = Scene::new(&PointCloud::new(all), &c);
+            assert_eq!(contents(&added), contents(&at_once), "{round}");
+        }
     }
 
     /// A seeded uniform number in [0, 1).
