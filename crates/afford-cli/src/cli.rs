@@ -65,7 +65,7 @@ struct SynthArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Scenes of each kind: full models, single views, objects against a wall, rooms.
-    #[arg(long, num_args = 4, value_names = ["FULL", "VIEW", "WALL", "ROOM"], value_parser = parse_count)]
+    #[arg(long, num_args = 4, value_names = ["FULL", "VIEW", "WALL", "ROOM"], value_parser = parse_count, conflicts_with_all = ["mesh", "models"])]
     count: Option<Vec<usize>>,
     /// Render depth views of these triangle-mesh PLY files instead of furniture.
     #[arg(long, num_args = 1..)]
@@ -76,16 +76,17 @@ struct SynthArgs {
     /// Views per mesh or model.
     #[arg(long, default_value_t = 3)]
     views: usize,
-    /// Depth-camera pixel stride (1 = 640 x 480 rays, 2 = 320 x 240, ...).
+    /// Depth-camera pixel stride (1 = 640 x 480 rays, 2 = 320 x 240, ...), also for the
+    /// views of --mesh and --models.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=16))]
     stride: u32,
     /// Which world: `default` (the mix of the tables in docs/results.md, same bytes per seed) or `wide`
     /// (ceilings, overhangs, reconstructed and subsampled clouds, pitched cameras, dressed
-    /// beds, new furniture; docs/formats.md "Synthetic data").
-    #[arg(long, default_value = "default", value_parser = ["default", "wide"])]
+    /// beds, new furniture; docs/formats.md "Synthetic data"). Not with --mesh or --models.
+    #[arg(long, default_value = "default", value_parser = ["default", "wide"], conflicts_with_all = ["mesh", "models"])]
     mix: String,
-    /// Frame of the written clouds: `world` (z up, floor at 0) or `camera` (each scene in
-    /// its depth camera's frame; evaluate with --camera --floor auto).
+    /// Frame of the written clouds: `world` (z up, floor at 0) or `camera` (each scene or
+    /// view in its depth camera's frame; evaluate with --camera --floor auto).
     #[arg(long, default_value = "world", value_parser = ["world", "camera"])]
     frame: String,
     /// Probability (0 to 1) that a depth-camera pixel at a depth edge gives a mixed
@@ -95,8 +96,9 @@ struct SynthArgs {
     mixed_pixels: f64,
     /// Single views of seats from every side alike (by default 85% come from within 80
     /// degrees of the seat's front): as independently generated views and a robot walking
-    /// round a room see them, seats seen from behind included.
-    #[arg(long)]
+    /// round a room see them, seats seen from behind included. Not with --mesh or
+    /// --models, whose views are taken from every side already.
+    #[arg(long, conflicts_with_all = ["mesh", "models"])]
     all_round: bool,
 }
 

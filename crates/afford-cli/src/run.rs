@@ -737,26 +737,34 @@ pub fn run_synth(
     use afford_synth::dataset;
     std::fs::create_dir_all(&req.out)
         .with_context(|| format!("{}: cannot create", req.out.display()))?;
+    let frame = if req.camera_frame {
+        dataset::OutFrame::Camera
+    } else {
+        dataset::OutFrame::World
+    };
+    let views = dataset::MeshViews {
+        views: req.views,
+        stride: req.stride,
+        mixed_pixels: req.mixed_pixels,
+        frame,
+    };
     if let Some(labels) = &req.models {
-        let s = dataset::views_of_labelled_models(
-            labels,
-            &req.out,
-            req.seed,
-            req.views,
-            req.mixed_pixels,
-        )?;
-        let text = format!(
+        let s = dataset::views_of_labelled_models(labels, &req.out, req.seed, &views)?;
+        let mut text = format!(
             "wrote {} views and {}\n",
             s.rows.len(),
             s.labels_csv.display()
         );
+        if req.camera_frame {
+            text.push_str(&camera_frame_hint(&s.labels_csv));
+        }
         print(out, &text)?;
         return Ok(Outcome::Done);
     }
     if !req.meshes.is_empty() {
         let mut failed = false;
         for m in &req.meshes {
-            match dataset::render_mesh_views(m, &req.out, req.seed, req.views, req.mixed_pixels) {
+            match dataset::render_mesh_views(m, &req.out, req.seed, &views) {
                 Ok(files) => {
                     let text: String = files.iter().map(|f| format!("{}\n", f.display())).collect();
                     if let Err(e) = print(out, &text) {
@@ -782,11 +790,7 @@ pub fn run_synth(
         } else {
             dataset::Mix::Default
         },
-        frame: if req.camera_frame {
-            dataset::OutFrame::Camera
-        } else {
-            dataset::OutFrame::World
-        },
+        frame,
         mixed_pixels: req.mixed_pixels,
         all_round: req.all_round,
         ..Default::default()
@@ -806,13 +810,19 @@ pub fn run_synth(
         s.labels_csv.display()
     );
     if req.camera_frame {
-        text.push_str(&format!(
-            "clouds are in their cameras' frames: afford eval {} --camera --floor auto\n",
-            s.labels_csv.display()
-        ));
+        text.push_str(&camera_frame_hint(&s.labels_csv));
     }
     print(out, &text)?;
     Ok(Outcome::Done)
+}
+
+/// The line `afford synth` prints after writing clouds in their cameras' frames: how to
+/// evaluate them.
+fn camera_frame_hint(labels_csv: &Path) -> String {
+    format!(
+        "clouds are in their cameras' frames: afford eval {} --camera --floor auto\n",
+        labels_csv.display()
+    )
 }
 
 /// Everything `afford eval` was asked to do.

@@ -236,6 +236,29 @@ fn body_heights_outside_reason_are_refused() {
     assert!(text(&o.stderr).contains("17.5"));
 }
 
+/// `synth --mesh` and `--models` render given meshes from every side: the options that
+/// choose generated furniture and how it is seen are refused with them, not ignored.
+#[test]
+fn synth_refuses_furniture_options_with_given_meshes() {
+    let d = tmp();
+    let out = p(d.path(), "out");
+    for extra in [
+        &["--mix", "wide"][..],
+        &["--all-round"],
+        &["--count", "1", "1", "1", "1"],
+    ] {
+        for given in ["--mesh", "--models"] {
+            let mut args = vec!["synth", "--out", &out, given, "x.ply"];
+            args.extend_from_slice(extra);
+            let o = afford(&args);
+            assert_eq!(o.status.code(), Some(2), "{args:?}");
+            let err = text(&o.stderr);
+            assert!(err.contains("cannot be used with"), "{args:?}: {err}");
+        }
+    }
+    assert!(!d.path().join("out").exists());
+}
+
 #[test]
 fn a_camera_frame_in_millimetres_with_auto_floor_gives_the_same_affordances() {
     use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};

@@ -1623,18 +1623,44 @@ pub fn generate(
     Ok(DatasetSummary { labels_csv, rows })
 }
 
+/// How the depth views of a mesh are taken ([`render_mesh_views`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeshViews {
+    /// Views per mesh.
+    pub views: usize,
+    /// Pixel stride of the depth camera (2 = 320 × 240 rays).
+    pub stride: u32,
+    /// Probability of a mixed ("flying") pixel at each depth edge.
+    pub mixed_pixels: f64,
+    /// The frame each view is written in: the world's (z up, floor at z = 0) or its
+    /// camera's (x right, y down, z forward).
+    pub frame: OutFrame,
+}
+
+impl Default for MeshViews {
+    /// Three views, stride 2, no mixed pixels, in the world frame.
+    fn default() -> Self {
+        MeshViews {
+            views: 3,
+            stride: 2,
+            mixed_pixels: 0.0,
+            frame: OutFrame::World,
+        }
+    }
+}
+
 /// Reads a triangle-mesh PLY (metres, z up, standing on z = 0; e.g.
-/// `real-models/meshes/*.ply`) and writes `views` depth views of it standing on a floor,
-/// seen by the default Kinect-v1 camera (stride 2) from random azimuths all around (the
-/// model's front is unknown), 1.0–1.8 m high, at a distance that fits the model in view.
-/// Files are `<out_dir>/<stem>_vNN.ply` (binary, x y z); returns their paths.
-/// Deterministic for `seed`.
+/// `real-models/meshes/*.ply`) and writes `how.views` depth views of it standing on a
+/// floor, seen by the default Kinect-v1 camera (pixel stride `how.stride`) from random
+/// azimuths all around (the model's front is unknown), 1.0–1.8 m high, at a distance that
+/// fits the model in view, each in the frame `how.frame`. Files are
+/// `<out_dir>/<stem>_vNN.ply` (binary, x y z); returns their paths. Deterministic for
+/// `seed`; the frame changes where a view's points are written, not which they are.
 pub fn render_mesh_views(
     mesh_path: &Path,
     out_dir: &Path,
     seed: u64,
-    views: usize,
-    mixed_pixels: f64,
+    how: &MeshViews,
 ) -> Result<Vec<PathBuf>, SynthError> {
     std::fs::create_dir_all(out_dir).map_err(io_err(out_dir))?;
     let model = read_mesh_ply(mesh_path)?;
@@ -1650,14 +1676,17 @@ pub fn render_mesh_views(
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "mesh".into());
     let mut out = Vec::new();
-    for k in 0..views {
+    for k in 0..how.views {
         let mut rng = ChaCha8Rng::seed_from_u64(mix(seed ^ mix(k as u64)));
         let az = u(&mut rng, -180.0, 180.0).to_radians();
         let dist = u(&mut rng, 1.5, 3.0) + (r - 0.5).max(0.0) * 0.8;
         let focus = (hi.z * 0.5).min(0.6);
-        let mut cam = camera_at(&mut rng, cx, cy, az, dist, focus, 2);
-        cam.noise.mixed_pixels = mixed_pixels;
-        let (cloud, _) = render_view_triangles(&scene, &cam, mix(seed ^ k as u64 ^ 7));
+        let mut cam = camera_at(&mut rng, cx, cy, az, dist, focus, how.stride);
+        cam.noise.mixed_pixels = how.mixed_pixels;
+        let (mut cloud, _) = render_view_triangles(&scene, &cam, mix(seed ^ k as u64 ^ 7));
+        if how.frame == OutFrame::Camera {
+            super::wide::into_camera_frame(&mut cloud.points, &cam);
+        }
         let path = out_dir.join(format!("{stem}_v{k:02}.ply"));
         cloud::write_ply_points(&path, &cloud.points, &[], true)?;
         out.push(path);
@@ -1744,15 +1773,15 @@ pub fn read_labels(path: &Path) -> Result<Vec<LabelRow>, SynthError> {
 
 /// Turns a labels file of meshes (like `real-models/labels.csv`: `file` relative to the
 /// CSV, affordance columns, `class`, `doubtful`) into a dataset of depth views in
-/// `out_dir`: `views_per_model` views per mesh (see [`render_mesh_views`]) and a
+/// `out_dir`: `how.views` views per mesh (see [`render_mesh_views`]) and a
 /// `labels.csv` carrying over the affordance columns (missing ones as 0), `class` and
-/// `doubtful`, with `kind` = `view`. Deterministic for `seed`.
+/// `doubtful`, with `kind` = `view` (and `frame` = `camera` where the views are in their
+/// cameras' frames). Deterministic for `seed`.
 pub fn views_of_labelled_models(
     labels_csv: &Path,
     out_dir: &Path,
     seed: u64,
-    views_per_model: usize,
-    mixed_pixels: f64,
+    how: &MeshViews,
 ) -> Result<DatasetSummary, SynthError> {
     let lerr = |what: String| SynthError::Labels {
         path: labels_csv.to_path_buf(),
@@ -1767,13 +1796,7 @@ pub fn views_of_labelled_models(
         let get = |n: &str| col(n).and_then(|c| rec.get(c)).map(str::trim).unwrap_or("");
         let labels = labels_of(&headers, rec);
         let file = rec.get(fcol).unwrap_or("").trim();
-        let paths = render_mesh_views(
-            &base.join(file),
-            out_dir,
-            mix(seed ^ i as u64),
-            views_per_model,
-            mixed_pixels,
-        )?;
+        let paths = render_mesh_views(&base.join(file), out_dir, mix(seed ^ i as u64), how)?;
         for p in paths {
             let points = cloud::read_ply(&p)?.len();
             rows.push(LabelRow {
@@ -1786,7 +1809,7 @@ pub fn views_of_labelled_models(
                 class: get("class").to_string(),
                 doubtful: Some(get("doubtful").to_string()).filter(|s| !s.is_empty()),
                 points,
-                frame: None,
+                frame: (how.frame == OutFrame::Camera).then(|| how.frame.name().to_string()),
             });
         }
     }
@@ -2341,5 +2364,64 @@ mod tests {
             assert!(!s.labels.backrest && !s.labels.headrest && !s.labels.armrest);
         }
         assert!(wall_backs(Class::Toilet) && !wall_backs(Class::BunkBed));
+    }
+
+    /// A 0.5 m cube standing on the floor at the origin, as an ascii PLY mesh.
+    fn cube_ply(path: &Path) {
+        let mut m = Mesh::new();
+        m.add_box(p3(-0.25, -0.25, 0.0), p3(0.25, 0.25, 0.5), Part::Other);
+        let mut t = format!(
+            "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+            m.vertices.len(),
+            m.triangles.len()
+        );
+        for v in &m.vertices {
+            t += &format!("{} {} {}\n", v.x, v.y, v.z);
+        }
+        for [a, b, c] in &m.triangles {
+            t += &format!("3 {a} {b} {c}\n");
+        }
+        std::fs::write(path, t).unwrap();
+    }
+
+    /// The views of a mesh take the pixel stride and the frame asked: a coarser stride
+    /// gives fewer points of the same scene; the camera frame moves every point rigidly
+    /// (the distances between them stay) to depths in front of the camera, where the world
+    /// frame has the floor at z = 0.
+    #[test]
+    fn mesh_views_take_the_stride_and_the_frame_asked() {
+        let d = tempfile::tempdir().unwrap();
+        let mesh = d.path().join("cube.ply");
+        cube_ply(&mesh);
+        let view = |name: &str, how: MeshViews| {
+            let out = d.path().join(name);
+            let files = render_mesh_views(&mesh, &out, 4, &how).unwrap();
+            assert_eq!(files.len(), how.views);
+            cloud::read_ply(&files[0]).unwrap()
+        };
+        let one = MeshViews {
+            views: 1,
+            ..MeshViews::default()
+        };
+        let world = view("world", one);
+        let camera = view(
+            "camera",
+            MeshViews {
+                frame: OutFrame::Camera,
+                ..one
+            },
+        );
+        let sparse = view("sparse", MeshViews { stride: 4, ..one });
+        assert!(world.len() > 1000);
+        assert_eq!(camera.len(), world.len());
+        assert!(sparse.len() * 3 < world.len() && sparse.len() * 5 > world.len());
+        let lowest = world.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+        assert!(lowest.abs() < 0.05, "{lowest}");
+        assert!(camera.iter().all(|p| p.z > 0.3));
+        for k in [1, world.len() / 2, world.len() - 1] {
+            let (dw, dc) = ((world[k] - world[0]).norm(), (camera[k] - camera[0]).norm());
+            assert!((dw - dc).abs() < 1e-3, "{dw} {dc}");
+        }
+        assert!((camera[0] - world[0]).norm() > 0.1);
     }
 }
