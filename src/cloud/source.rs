@@ -145,6 +145,46 @@ pub fn needs_source(path: &Path) -> bool {
     matches!(lower_ext(path).as_str(), "mcap" | "e57" | "png")
 }
 
+/// The source options of `opts` that no file of `paths` reads, as warning lines (without
+/// `warning: `), in the order of the flags: a `--topic`, `--every` or `--at` where no file
+/// is a ROS bag, a `--scan` where none is an E57 file, an `--intrinsics` or a
+/// `--depth-scale` other than millimetres where none is a depth image. Such an option is
+/// left unused, which is what a batch over mixed files wants; given for files it does not
+/// apply to, it is most likely a mistake worth a line.
+pub fn unused_options(opts: &SourceOptions, paths: &[PathBuf]) -> Vec<String> {
+    let any = |ext: &str| paths.iter().any(|p| lower_ext(p) == ext);
+    let mut out = Vec::new();
+    let mut unused = |given: bool, flag: &str, ext: &str, what: &str| {
+        if given && !any(ext) {
+            out.push(format!(
+                "{flag} applies to {what} (.{ext}); no input is one, so it is not used"
+            ));
+        }
+    };
+    unused(opts.topic.is_some(), "--topic", "mcap", "ROS bags");
+    let (every, at) = match opts.pick {
+        Pick::All => (false, false),
+        Pick::Every(_) => (true, false),
+        Pick::At(_) => (false, true),
+    };
+    unused(every, "--every", "mcap", "ROS bags");
+    unused(at, "--at", "mcap", "ROS bags");
+    unused(opts.scan.is_some(), "--scan", "e57", "E57 files");
+    unused(
+        opts.intrinsics.is_some(),
+        "--intrinsics",
+        "png",
+        "depth images",
+    );
+    unused(
+        opts.depth_scale != DEPTH_SCALE,
+        "--depth-scale",
+        "png",
+        "depth images",
+    );
+    out
+}
+
 /// An error about the options for a file (a topic it lacks, a scan it does not have).
 pub(crate) fn select_error(path: &Path, what: impl Into<String>) -> CloudError {
     CloudError::Select {
@@ -257,5 +297,34 @@ mod tests {
         ] {
             assert!(parse_time(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn source_options_for_no_input_of_their_kind_are_named() {
+        let paths: Vec<PathBuf> = ["a.ply", "b.PCD", "c.e57"]
+            .iter()
+            .map(PathBuf::from)
+            .collect();
+        let opts = SourceOptions {
+            topic: Some("/points".into()),
+            pick: Pick::Every(3),
+            scan: Some(2),
+            intrinsics: Some(Intrinsics::from_str("500,500,320,240").unwrap()),
+            depth_scale: 0.0002,
+        };
+        let lines = unused_options(&opts, &paths);
+        let flags: Vec<&str> = lines.iter().filter_map(|l| l.split(' ').next()).collect();
+        assert_eq!(
+            flags,
+            ["--topic", "--every", "--intrinsics", "--depth-scale"]
+        );
+        assert_eq!(
+            lines[2],
+            "--intrinsics applies to depth images (.png); no input is one, so it is not used"
+        );
+        let mut with_all = paths.clone();
+        with_all.extend(["d.mcap", "e.png"].iter().map(PathBuf::from));
+        assert!(unused_options(&opts, &with_all).is_empty());
+        assert!(unused_options(&SourceOptions::default(), &paths).is_empty());
     }
 }

@@ -231,6 +231,7 @@ pub fn run_detect(
     let files = &inputs.files;
     let several = inputs.total > 1;
     check_outputs(req, files, several)?;
+    warn_unused(&req.settings.input, files, err);
     // The first error writing standard output: a closed pipe (`| head`) stops the run
     // quietly, any other (a full disk) is reported at the end.
     let mut out_error: Option<std::io::Error> = None;
@@ -654,6 +655,7 @@ pub fn run_inspect(
     err: &mut dyn Write,
 ) -> anyhow::Result<Outcome> {
     let models = req.settings.models.load()?;
+    warn_unused(&req.settings.input, std::slice::from_ref(&req.file), err);
     let loaded = load_input(&req.file, &req.settings.input)?;
     notes(&loaded, &req.file, err);
     let prepared = prepare_guarded(&req.file, &loaded.cloud, &req.settings.detect)?;
@@ -902,6 +904,14 @@ pub struct ConvertRequest {
     pub options: InputOptions,
 }
 
+/// Writes a warning line to `err` for each source option that no file of `paths` reads
+/// ([`afford::cloud::source::unused_options`]).
+fn warn_unused(opts: &InputOptions, paths: &[PathBuf], err: &mut dyn Write) {
+    for line in afford::cloud::source::unused_options(&opts.source, paths) {
+        let _ = writeln!(err, "warning: {line}");
+    }
+}
+
 /// Runs `afford convert`: reads any input the detector reads (with the same frame options)
 /// and writes it as PLY (binary or ascii) or binary PCD, in metres, z up, floor at z = 0.
 pub fn run_convert(
@@ -915,6 +925,7 @@ pub fn run_convert(
             req.output.display()
         );
     }
+    warn_unused(&req.options, std::slice::from_ref(&req.input), err);
     let input = load_input(&req.input, &req.options)?;
     notes(&input, &req.input, err);
     let ext = req

@@ -236,6 +236,35 @@ fn body_heights_outside_reason_are_refused() {
     assert!(text(&o.stderr).contains("17.5"));
 }
 
+/// A source option given where no input is of its kind is named in one warning line,
+/// and the run goes on as without it.
+#[test]
+fn source_options_that_no_input_reads_are_warned_about() {
+    let o = afford(&[
+        "detect",
+        SAMPLE,
+        "--intrinsics",
+        "500,500,320,240",
+        "--scan",
+        "2",
+    ]);
+    assert_eq!(o.status.code(), Some(0));
+    let err = text(&o.stderr);
+    assert!(
+        err.contains(
+            "warning: --scan applies to E57 files (.e57); no input is one, so it is not used\n"
+        ),
+        "{err}"
+    );
+    assert!(
+        err.contains("warning: --intrinsics applies to depth images (.png)"),
+        "{err}"
+    );
+    let plain = afford(&["detect", SAMPLE]);
+    assert_eq!(o.stdout, plain.stdout);
+    assert!(!text(&plain.stderr).contains("warning"));
+}
+
 /// `synth --mesh` and `--models` render given meshes from every side: the options that
 /// choose generated furniture and how it is seen are refused with them, not ignored.
 #[test]
