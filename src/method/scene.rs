@@ -99,8 +99,8 @@ impl Scene {
         cfg: &SceneConfig,
     ) -> Scene {
         let v = cfg.voxel_size;
-        let bounds = |pts: &[Point3<f64>]| PointCloud::new(pts.to_vec()).bounds();
-        let all = match (cloud.bounds(), bounds(more)) {
+        let more = PointCloud::new(more.to_vec());
+        let all = match (cloud.bounds(), more.bounds()) {
             (Some((a, b)), Some((c, d))) => Some((a.inf(&c), b.sup(&d))),
             (a, c) => a.or(c),
         };
@@ -108,10 +108,10 @@ impl Scene {
         if origin != self.origin || v != self.voxel {
             let mut points = Vec::with_capacity(cloud.len() + more.len());
             points.extend_from_slice(&cloud.points);
-            points.extend_from_slice(more);
+            points.extend_from_slice(&more.points);
             return Scene::new(&PointCloud::new(points), cfg);
         }
-        let added = occupied_keys(&PointCloud::new(more.to_vec()), origin, v);
+        let added = occupied_keys(&more, origin, v);
         Scene::of_keys(merge_keys(&self.keys(), &added), origin, cfg)
     }
 
@@ -1295,11 +1295,12 @@ fn merge_keys(a: &[[i64; 3]], b: &[[i64; 3]]) -> Vec<[i64; 3]> {
 }
 
 /// The voxels holding a point of `cloud` (world frame, metres): the keys (cells of edge
-/// `v` from `origin`, [`cell_of`]) sorted by [`zyx`] and each once. A point in the voxel of the point
-/// before it (a run of points in one voxel, as a depth image's rows give) adds no key, so
-/// fewer keys are sorted: the same keys as sorting every point's and removing repeats
-/// (test `occupied_keys_are_the_sorted_distinct_keys`), in no more memory. In that order
-/// the distance field's rows along x ([`DistanceField::new`]) come sorted already.
+/// `v` from `origin`, [`cell_of`]) sorted by [`zyx`] and each once. A point in the voxel
+/// of the point before it (a run of points in one voxel, as a depth image's rows give)
+/// adds no key, so fewer keys are sorted: the same keys as sorting every point's and
+/// removing repeats (test `occupied_keys_are_the_sorted_distinct_keys`), in no more
+/// memory. In that order the distance field's rows along x ([`DistanceField::new`]) come
+/// sorted already.
 fn occupied_keys(cloud: &PointCloud, origin: Vector3<f64>, v: f64) -> Vec<[i64; 3]> {
     // Room for every point's key, as before; only the pages written are resident.
     let mut keys: Vec<[i64; 3]> = Vec::with_capacity(cloud.len());
