@@ -222,7 +222,7 @@ fn prepare_spaced(
         };
     }
     let fill_at = fill_points(&map, &found, cfg.scene.voxel_size);
-    let scene = scene.with_points(cloud, &fill_at, &cfg.scene);
+    let scene = scene.with_points(cloud, fill_at, &cfg.scene);
     Prepared {
         map,
         scene,

@@ -95,11 +95,11 @@ impl Scene {
     pub fn with_points(
         &self,
         cloud: &PointCloud,
-        more: &[Point3<f64>],
+        more: Vec<Point3<f64>>,
         cfg: &SceneConfig,
     ) -> Scene {
         let v = cfg.voxel_size;
-        let more = PointCloud::new(more.to_vec());
+        let more = PointCloud::new(more);
         let all = match (cloud.bounds(), more.bounds()) {
             (Some((a, b)), Some((c, d))) => Some((a.inf(&c), b.sup(&d))),
             (a, c) => a.or(c),
@@ -3011,7 +3011,7 @@ mod tests {
             all.extend_from_slice(&more);
             let cloud = PointCloud::new(cloud);
             let c = cfg(round % 2 == 0);
-            let added = Scene::new(&cloud, &c).with_points(&cloud, &more, &c);
+            let added = Scene::new(&cloud, &c).with_points(&cloud, more, &c);
             let at_once = Scene::new(&PointCloud::new(all), &c);
             assert_eq!(contents(&added), contents(&at_once), "{round}");
         }

@@ -166,6 +166,16 @@ impl Camera {
         (forward, right, up)
     }
 
+    /// Moves `points` (world frame) into this camera's frame: x right, y down, z forward,
+    /// metres from its centre.
+    pub fn into_own_frame(&self, points: &mut [Point3<f64>]) {
+        let (forward, right, up) = self.basis();
+        for p in points {
+            let d = *p - self.position;
+            *p = Point3::new(d.dot(&right), -d.dot(&up), d.dot(&forward));
+        }
+    }
+
     /// Unit ray direction (world frame) through the centre of pixel (`u`, `v`); `u` counts
     /// columns from the left, `v` rows from the top.
     pub fn ray(&self, u: u32, v: u32) -> Vector3<f64> {

@@ -1685,7 +1685,7 @@ pub fn render_mesh_views(
         cam.noise.mixed_pixels = how.mixed_pixels;
         let (mut cloud, _) = render_view_triangles(&scene, &cam, mix(seed ^ k as u64 ^ 7));
         if how.frame == OutFrame::Camera {
-            super::wide::into_camera_frame(&mut cloud.points, &cam);
+            cam.into_own_frame(&mut cloud.points);
         }
         let path = out_dir.join(format!("{stem}_v{k:02}.ply"));
         cloud::write_ply_points(&path, &cloud.points, &[], true)?;

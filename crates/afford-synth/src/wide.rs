@@ -1042,18 +1042,8 @@ pub(super) fn to_camera_frame(s: &mut Scene, seed: u64) {
         let az = u(&mut rng, -180.0, 180.0).to_radians();
         pitched_camera(&mut rng, cx, cy, az, 0.5, r, 1, MAX_CAMERA_HEIGHT_M)
     });
-    into_camera_frame(&mut s.points, &cam);
+    cam.into_own_frame(&mut s.points);
     s.camera = Some(cam);
-}
-
-/// Moves `points` (world frame) into the frame of camera `cam`: x right, y down, z
-/// forward, metres from its centre.
-pub(super) fn into_camera_frame(points: &mut [Point3<f64>], cam: &Camera) {
-    let (forward, right, up) = cam.basis();
-    for p in points {
-        let d = *p - cam.position;
-        *p = Point3::new(d.dot(&right), -d.dot(&up), d.dot(&forward));
-    }
 }
 
 /// The room of a wide `room` or `scan` scene: walls `2 hx` × `2 hy` and `height` high, a
