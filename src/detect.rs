@@ -48,6 +48,10 @@ pub struct DetectConfig {
     pub speck_min_cell: f64,
     /// See `speck_spacings`.
     pub speck_cubes: usize,
+    /// A cube of a component that small also joins the occupied cubes on both sides of
+    /// it along a line, up to this many cubes away along each axis: the samples of a
+    /// surface seen at a grazing angle go on through it, a stray's do not.
+    pub speck_line: usize,
 }
 
 /// The default voxel edge, metres: at most 0.02 m, finer than the 3-4 cm radius of the
@@ -104,6 +108,10 @@ impl DetectConfig {
             // 8 cubes (0.04-0.16 m across): a clump of stray returns or a floating
             // fragment; anything a forearm or a body rests on spans more.
             speck_cubes: 8,
+            // 2 cubes (3 spacings): a depth camera's rows land on a surface seen at
+            // 20 degrees 3 spacings apart (1 / sin 20 deg), one empty cube between its
+            // samples; a camera 1.75 m high sees a 0.6 m arm top 3 m away at 21 degrees.
+            speck_line: 2,
         }
     }
 }
@@ -298,13 +306,20 @@ pub fn prepare_guarded(
     // The spacing is measured once, for the specks' cubes and the height map. Where it
     // gives cubes no larger than `speck_min_cell` (every densely sampled cloud), the
     // specks on those cubes are found beside it; else found again on the larger cubes.
-    let at_min = || without_specks(&kept.cloud, cfg.speck_min_cell, cfg.speck_cubes);
+    let at_min = || {
+        without_specks(
+            &kept.cloud,
+            cfg.speck_min_cell,
+            cfg.speck_cubes,
+            cfg.speck_line,
+        )
+    };
     let (spacing, specks) = rayon::join(|| point_spacing(&kept.cloud), at_min);
     let cell = spacing
         .map_or(0.0, |s| cfg.speck_spacings * s)
         .max(cfg.speck_min_cell);
     let specks = if cell > cfg.speck_min_cell {
-        without_specks(&kept.cloud, cell, cfg.speck_cubes)
+        without_specks(&kept.cloud, cell, cfg.speck_cubes, cfg.speck_line)
     } else {
         specks
     };

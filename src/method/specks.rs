@@ -13,9 +13,20 @@
 //! The test is on a grid of cubes of edge `cell`: the occupied cubes are joined into
 //! components through their faces, edges and corners (26-connected), and the points of a
 //! component of at most `max_cubes` cubes are specks. With one cube allowed, a speck is a
-//! point or a clump with no other point within `cell` of it. The components are a
-//! partition of the occupied cubes, which depends only on the set of points, so the
-//! answer does not depend on their order or on the thread count.
+//! point or a clump with no other point within `cell` of it.
+//!
+//! A surface seen at a grazing angle is sampled more sparsely than the cloud's spacing
+//! says: a depth camera's rows land on it `1 / sin` of the angle further apart (3 spacings
+//! at 20 degrees), so the top of a sofa's arm or back, a seat's side edge or a shelf's
+//! board seen from a few metres away falls apart into pieces of a cube or two, each of
+//! them as small as a speck, and with them the arm, the back or the seat's edge the later
+//! stages look for (and a board a body then sits in between). What tells such
+//! a piece from a stray is what lies beyond it: the samples of a surface go on through it,
+//! on both sides, along a line, while nothing lies beyond a stray on its far side from the
+//! surface it is near. So a cube of a small component is also joined to two occupied cubes
+//! at opposite offsets of up to `line` cubes along each axis (a line of samples through
+//! it). The components are a partition of the occupied cubes, which depends only on the
+//! set of points, so the answer does not depend on their order or on the thread count.
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -25,16 +36,17 @@ use rayon::prelude::*;
 use crate::cellhash::{component_roots, offset_key, CellMap, CellSet, CubeBox};
 use crate::cloud::PointCloud;
 
-/// For each point of `points`, whether it belongs to a speck: a 26-connected component of
-/// at most `max_cubes` occupied cubes of edge `cell` metres (see the module
-/// documentation). Cube indices saturate at `i64`'s range (the guard refuses coordinates
-/// that far out before this stage runs).
-pub fn specks(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> Vec<bool> {
-    in_cubes(points, cell, &speck_cubes(points, cell, max_cubes))
+/// For each point of `points`, whether it belongs to a speck: a component of at most
+/// `max_cubes` occupied cubes of edge `cell` metres, 26-connected and joined along lines of
+/// samples up to `line` cubes apart (see the module documentation). Cube indices saturate
+/// at `i64`'s range (the guard refuses coordinates that far out before this stage runs).
+pub fn specks(points: &[Point3<f64>], cell: f64, max_cubes: usize, line: usize) -> Vec<bool> {
+    in_cubes(points, cell, &speck_cubes(points, cell, max_cubes, line))
 }
 
 /// The occupied cubes of edge `cell` metres of `points` that lie in components of at most
-/// `max_cubes` cubes (see [`specks`]): usually none, and a few where there are specks.
+/// `max_cubes` cubes, joined along lines up to `line` cubes apart (see [`specks`]):
+/// usually none, and a few where there are specks.
 ///
 /// Where at least half the points (of a sample) start a run of points in one cube (a
 /// scan's points, unlike a depth image's rows, do not come in runs) and the box of the occupied cubes
@@ -42,7 +54,12 @@ pub fn specks(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> Vec<bool> 
 /// grid over it ([`dense_speck_cubes`]), which costs no hashing per point; else they are
 /// hashed, a run at a time ([`hashed_speck_cubes`]). The components, so the answer,
 /// depend only on the set of occupied cubes.
-fn speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[i64; 3]> {
+fn speck_cubes(
+    points: &[Point3<f64>],
+    cell: f64,
+    max_cubes: usize,
+    line: usize,
+) -> CellSet<[i64; 3]> {
     // Points in long runs (a depth image's rows) hash one cube a run, fewer than a dense
     // grid costs to fill and read; points mostly not in runs (a scan) go to the grid. A
     // point over a cube's edge from the one before is in another cube: counted on a
@@ -54,7 +71,7 @@ fn speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[
             (n + 1, j + usize::from(jump))
         });
     if jumps.saturating_mul(2) < pairs {
-        return hashed_speck_cubes(points, cell, max_cubes);
+        return hashed_speck_cubes(points, cell, max_cubes, line);
     }
     let small_box = |b: &CubeBox| {
         b.len().is_some_and(|n| {
@@ -65,8 +82,8 @@ fn speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[
     // Without a box that holds every cube (no points, non-finite coordinates), hashed.
     CubeBox::of(points, cell, PIECE)
         .filter(small_box)
-        .and_then(|b| dense_speck_cubes(points, cell, max_cubes, b))
-        .unwrap_or_else(|| hashed_speck_cubes(points, cell, max_cubes))
+        .and_then(|b| dense_speck_cubes(points, cell, max_cubes, line, b))
+        .unwrap_or_else(|| hashed_speck_cubes(points, cell, max_cubes, line))
 }
 
 /// Every how many points [`speck_cubes`] looks at a pair of consecutive points to tell a
@@ -86,6 +103,7 @@ fn dense_speck_cubes(
     points: &[Point3<f64>],
     cell: f64,
     max_cubes: usize,
+    line: usize,
     boxed: CubeBox,
 ) -> Option<CellSet<[i64; 3]>> {
     // 0: empty; else the cube's number plus one once numbered (1 while only marked).
@@ -116,7 +134,7 @@ fn dense_speck_cubes(
             *g = u32::try_from(cubes.len()).unwrap_or(u32::MAX);
         }
     }
-    let small = small_components(cubes.len(), max_cubes, |i, d| {
+    let small = small_components(cubes.len(), max_cubes, line, |i, d| {
         match grid[boxed.index(boxed.step(cubes[i], d)?)].load(Ordering::Relaxed) {
             0 => None,
             id => Some(id as usize - 1),
@@ -134,7 +152,12 @@ fn dense_speck_cubes(
 /// [`speck_cubes`] with the occupied cubes in a hash map, numbered in the order first
 /// met. A depth image lists row neighbours side by side: a run of points in one cube is
 /// looked up once.
-fn hashed_speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> CellSet<[i64; 3]> {
+fn hashed_speck_cubes(
+    points: &[Point3<f64>],
+    cell: f64,
+    max_cubes: usize,
+    line: usize,
+) -> CellSet<[i64; 3]> {
     let mut ids: CellMap<[i64; 3], usize> = CellMap::default();
     let mut cubes: Vec<[i64; 3]> = Vec::new();
     let mut last: Option<[i64; 3]> = None;
@@ -148,7 +171,7 @@ fn hashed_speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> Ce
             last = Some(k);
         }
     }
-    let small = small_components(cubes.len(), max_cubes, |i, d| {
+    let small = small_components(cubes.len(), max_cubes, line, |i, d| {
         ids.get(&offset_key(cubes[i], d)).copied()
     });
     cubes
@@ -159,19 +182,71 @@ fn hashed_speck_cubes(points: &[Point3<f64>], cell: f64, max_cubes: usize) -> Ce
         .collect()
 }
 
-/// For each of `n` occupied cubes, whether its 26-connected component
-/// ([`component_roots`], with `neighbour` as there) has at most `max_cubes` cubes.
+/// For each of `n` occupied cubes, whether its component has at most `max_cubes` cubes:
+/// 26-connected ([`component_roots`], with `neighbour` as there), then each cube of a
+/// component that small also joined to the two occupied cubes at `d` and `-d` for every
+/// offset `d` of up to `line` cubes along each axis that has both (a line of samples
+/// through it; offsets within one cube join it already). Union-find, the smaller root
+/// becoming the parent: the components, so the answer, depend only on the occupied cubes.
 fn small_components(
     n: usize,
     max_cubes: usize,
+    line: usize,
     neighbour: impl Fn(usize, (i64, i64, i64)) -> Option<usize>,
 ) -> Vec<bool> {
-    let roots = component_roots(n, neighbour);
-    let mut size = vec![0usize; n];
-    for &r in &roots {
-        size[r] += 1;
+    let sizes = |roots: &[usize]| {
+        let mut size = vec![0usize; n];
+        for &r in roots {
+            size[r] += 1;
+        }
+        size
+    };
+    let mut roots = component_roots(n, &neighbour);
+    let size = sizes(&roots);
+    let reach = i64::try_from(line).unwrap_or(i64::MAX).min(MAX_LINE);
+    if reach >= 2 && roots.iter().any(|&r| size[r] <= max_cubes) {
+        // The offsets beyond the 26 round a cube, one of each opposite pair.
+        let offsets: Vec<(i64, i64, i64)> = (-reach..=reach)
+            .flat_map(|x| {
+                (-reach..=reach).flat_map(move |y| (-reach..=reach).map(move |z| (x, y, z)))
+            })
+            .filter(|&(x, y, z)| x.abs().max(y.abs()).max(z.abs()) >= 2 && (x, y, z) > (0, 0, 0))
+            .collect();
+        let mut parent = roots.clone();
+        for i in 0..n {
+            if size[roots[i]] > max_cubes {
+                continue;
+            }
+            for &(x, y, z) in &offsets {
+                if let (Some(j), Some(k)) = (neighbour(i, (x, y, z)), neighbour(i, (-x, -y, -z))) {
+                    join(&mut parent, i, j);
+                    join(&mut parent, i, k);
+                }
+            }
+        }
+        roots = (0..n).map(|i| find(&mut parent, i)).collect();
     }
+    let size = sizes(&roots);
     roots.iter().map(|&r| size[r] <= max_cubes).collect()
+}
+
+/// The most cubes along each axis [`small_components`] looks for a line through a cube:
+/// 4 (729 offsets a cube of a small component), a bound on time for any `line`.
+const MAX_LINE: i64 = 4;
+
+/// The root of `x` in the union-find `parent`, halving the path on the way.
+fn find(parent: &mut [usize], mut x: usize) -> usize {
+    while parent[x] != x {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    x
+}
+
+/// Joins the sets of `a` and `b` in `parent`, the smaller root becoming the parent.
+fn join(parent: &mut [usize], a: usize, b: usize) {
+    let (a, b) = (find(parent, a), find(parent, b));
+    parent[a.max(b)] = a.min(b);
 }
 
 /// For each point of `points`, whether its cube of edge `cell` metres is one of `cubes`
@@ -197,8 +272,9 @@ pub fn without_specks(
     cloud: &PointCloud,
     cell: f64,
     max_cubes: usize,
+    line: usize,
 ) -> Option<(PointCloud, usize)> {
-    let cubes = speck_cubes(&cloud.points, cell, max_cubes);
+    let cubes = speck_cubes(&cloud.points, cell, max_cubes, line);
     if cubes.is_empty() {
         return None;
     }
@@ -240,30 +316,50 @@ mod tests {
         for i in 0..5 {
             pts.push(Point3::new(0.2 + i as f64 * 0.004, 0.3, 0.70));
         }
-        let flags = specks(&pts, 0.04, 1);
+        let flags = specks(&pts, 0.04, 1, 2);
         assert!(flags[..n].iter().all(|f| !f), "the seat's points are kept");
         assert!(flags[n..].iter().all(|&f| f), "{:?}", &flags[n..]);
         // A rod 0.3 m long is more than a few cubes: not a speck.
         let mut rod = plane(0.45, 0.01);
         rod.extend((0..30).map(|i| Point3::new(0.5, 0.5, 0.8 + i as f64 * 0.01)));
-        assert!(specks(&rod, 0.04, 4).iter().all(|f| !f));
+        assert!(specks(&rod, 0.04, 4, 2).iter().all(|f| !f));
         // ...but a clump of two cubes is one when two are allowed.
         let mut pair = plane(0.45, 0.01);
         pair.push(Point3::new(0.5, 0.5, 0.80));
         pair.push(Point3::new(0.5, 0.5, 0.85));
-        let flags = specks(&pair, 0.04, 2);
+        let flags = specks(&pair, 0.04, 2, 2);
         assert_eq!(flags.iter().filter(|&&f| f).count(), 2);
+    }
+
+    /// A seat's side edge seen at a grazing angle: a row of single samples 7 cm apart
+    /// beside a seat (one empty 4 cm cube between most of them), each piece a speck by
+    /// size alone, is kept; a stray 7 cm over the seat, with nothing beyond it, is not.
+    /// Fails without the line join (`line` 1).
+    #[test]
+    fn a_row_of_sparse_samples_is_kept_and_a_stray_beside_a_surface_is_not() {
+        let mut pts = plane(0.45, 0.01);
+        let n = pts.len();
+        pts.extend((0..13).map(|i| Point3::new(0.03 + i as f64 * 0.07, 1.1, 0.45)));
+        let row = pts.len();
+        pts.push(Point3::new(0.5, 0.5, 0.52));
+        let flags = specks(&pts, 0.04, 8, 2);
+        assert!(flags[..n].iter().all(|f| !f), "the seat's points are kept");
+        assert!(flags[n..row].iter().all(|f| !f), "{:?}", &flags[n..row]);
+        assert!(flags[row], "the stray over the seat is a speck");
+        // Without the join every piece of the row is a speck.
+        let flags = specks(&pts, 0.04, 8, 1);
+        assert!(flags[n..row].iter().all(|&f| f), "{:?}", &flags[n..row]);
     }
 
     #[test]
     fn the_speck_cubes_are_the_cubes_of_the_specks_points() {
         let mut pts = plane(0.45, 0.01);
-        assert!(speck_cubes(&pts, 0.04, 8).is_empty());
+        assert!(speck_cubes(&pts, 0.04, 8, 2).is_empty());
         // A lone point, and a pair in two cubes side by side.
         pts.push(Point3::new(0.55, 0.55, 0.75));
         pts.push(Point3::new(0.21, 0.3, 0.70));
         pts.push(Point3::new(0.25, 0.3, 0.70));
-        let cubes = speck_cubes(&pts, 0.04, 8);
+        let cubes = speck_cubes(&pts, 0.04, 8, 2);
         let mut got: Vec<[i64; 3]> = cubes.iter().copied().collect();
         got.sort_unstable();
         assert_eq!(got, vec![[5, 7, 17], [6, 7, 17], [13, 13, 18]]);
@@ -272,7 +368,7 @@ mod tests {
         assert!(flags[..n - 3].iter().all(|f| !f));
         assert!(flags[n - 3..].iter().all(|&f| f));
         // With one cube allowed, the pair is not a speck.
-        let one: Vec<[i64; 3]> = speck_cubes(&pts, 0.04, 1).into_iter().collect();
+        let one: Vec<[i64; 3]> = speck_cubes(&pts, 0.04, 1, 2).into_iter().collect();
         assert_eq!(one, vec![[13, 13, 18]]);
     }
 
@@ -311,16 +407,17 @@ mod tests {
             }
             let cell = [0.04, 0.05, 0.1][round % 3];
             let max_cubes = [1, 2, 8][round % 3];
+            let line = [1, 2, 3, 2][round % 4];
             let keys: Vec<[i64; 3]> = pts.iter().map(|p| CubeBox::cube_of(p, cell)).collect();
             let lo = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).min().unwrap());
             let hi = [0, 1, 2].map(|a| keys.iter().map(|k| k[a]).max().unwrap());
             let dims = [0, 1, 2].map(|a| usize::try_from(hi[a] - lo[a] + 1).unwrap());
             assert_eq!(CubeBox::of(&pts, cell, PIECE), Some(CubeBox { lo, dims }));
-            let hashed = sorted(hashed_speck_cubes(&pts, cell, max_cubes));
+            let hashed = sorted(hashed_speck_cubes(&pts, cell, max_cubes, line));
             let boxed = CubeBox { lo, dims };
-            let dense = sorted(dense_speck_cubes(&pts, cell, max_cubes, boxed).unwrap());
+            let dense = sorted(dense_speck_cubes(&pts, cell, max_cubes, line, boxed).unwrap());
             assert_eq!(dense, hashed, "round {round}");
-            assert_eq!(sorted(speck_cubes(&pts, cell, max_cubes)), hashed);
+            assert_eq!(sorted(speck_cubes(&pts, cell, max_cubes, line)), hashed);
             found += hashed.len();
         }
         assert!(found > 100, "{found} speck cubes");
@@ -332,16 +429,16 @@ mod tests {
         for i in (1..shuffled.len()).rev() {
             shuffled.swap(i, rng.random_range(0..=i));
         }
-        let want = sorted(hashed_speck_cubes(&shuffled, 0.1, 1));
+        let want = sorted(hashed_speck_cubes(&shuffled, 0.1, 1, 2));
         assert_eq!(want, vec![[5, 5, 5], [9, 1, 2]]);
-        assert_eq!(sorted(speck_cubes(&shuffled, 0.1, 1)), want);
+        assert_eq!(sorted(speck_cubes(&shuffled, 0.1, 1, 2)), want);
         // A non-finite coordinate puts a cube outside the box of the others: hashed.
         let mut odd = plane(0.0, 0.02);
         odd.push(Point3::new(f64::NAN, 3.0, 0.5));
         odd.push(Point3::new(0.5, f64::INFINITY, 0.5));
         assert_eq!(
-            sorted(speck_cubes(&odd, 0.04, 8)),
-            sorted(hashed_speck_cubes(&odd, 0.04, 8))
+            sorted(speck_cubes(&odd, 0.04, 8, 2)),
+            sorted(hashed_speck_cubes(&odd, 0.04, 8, 2))
         );
     }
 
@@ -350,9 +447,9 @@ mod tests {
         // Vertices 8 cm apart on 0.1 m cubes (a decimated reconstruction): every cube has
         // neighbours, so the surface is one component, whatever the points' order.
         let mut pts = plane(0.0, 0.08);
-        assert!(specks(&pts, 0.10, 8).iter().all(|f| !f));
+        assert!(specks(&pts, 0.10, 8, 2).iter().all(|f| !f));
         pts.reverse();
-        assert!(specks(&pts, 0.10, 8).iter().all(|f| !f));
+        assert!(specks(&pts, 0.10, 8, 2).iter().all(|f| !f));
     }
 
     #[test]
@@ -364,10 +461,10 @@ mod tests {
             Point3::new(0.5, 0.5, 0.7),
             Point3::new(0.5, 0.52, 0.7),
         ]);
-        let forward = specks(&pts, 0.10, 1);
+        let forward = specks(&pts, 0.10, 1, 2);
         let mut rev = pts.clone();
         rev.reverse();
-        let mut backward = specks(&rev, 0.10, 1);
+        let mut backward = specks(&rev, 0.10, 1, 2);
         backward.reverse();
         assert_eq!(forward, backward);
         assert_eq!(forward.iter().filter(|&&f| f).count(), 4);
@@ -395,7 +492,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| specks(&pts, 0.04, 8))
+                .install(|| specks(&pts, 0.04, 8, 2))
         };
         let one = on(1);
         assert_eq!(one, on(2));
@@ -408,7 +505,7 @@ mod tests {
             apart[i].x = 0.1 + 0.3 * (n / 6) as f64 + 0.001 * (n % 6) as f64;
             apart[i].y = 2.0;
         }
-        let flags = specks(&apart, 0.04, 8);
+        let flags = specks(&apart, 0.04, 8, 2);
         let marked: Vec<usize> = (0..apart.len()).filter(|&i| flags[i]).collect();
         let mut expected = strays.clone();
         expected.sort_unstable();
@@ -426,11 +523,11 @@ mod tests {
                 .map(|p| p + Vector3::new(3.0, 0.0, 0.0)),
         );
         let cloud = PointCloud::new(pts.clone());
-        let (kept, dropped) = without_specks(&cloud, 0.10, 8).expect("one dropped");
+        let (kept, dropped) = without_specks(&cloud, 0.10, 8, 2).expect("one dropped");
         assert_eq!(dropped, 1);
         let mut expected = pts.clone();
         expected.remove(first);
         assert_eq!(kept.points, expected);
-        assert!(without_specks(&PointCloud::new(plane(0.0, 0.02)), 0.10, 8).is_none());
+        assert!(without_specks(&PointCloud::new(plane(0.0, 0.02)), 0.10, 8, 2).is_none());
     }
 }
