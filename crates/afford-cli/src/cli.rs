@@ -57,6 +57,7 @@ struct ConvertArgs {
 }
 
 #[derive(clap::Args)]
+#[command(group(clap::ArgGroup::new("given_meshes").args(["mesh", "models"])))]
 struct SynthArgs {
     /// Output directory (created).
     #[arg(long)]
@@ -100,6 +101,24 @@ struct SynthArgs {
     /// --models, whose views are taken from every side already.
     #[arg(long, conflicts_with_all = ["mesh", "models"])]
     all_round: bool,
+    /// Lowest and highest the camera of the views of --mesh and --models is held, metres
+    /// above the floor, as MIN,MAX (default 1.0,1.8: a person's hands or a tripod; a
+    /// robot's camera is lower, 0.4-1.0 m). Only with --mesh or --models.
+    #[arg(long, value_name = "MIN,MAX", value_parser = camera_heights, requires = "given_meshes")]
+    camera_height: Option<[f64; 2]>,
+}
+
+/// `MIN,MAX` camera heights, metres: finite, 0 < MIN <= MAX <= 10.
+fn camera_heights(s: &str) -> Result<[f64; 2], String> {
+    let bad = || format!("'{s}' is not MIN,MAX in metres (0 < MIN <= MAX <= 10)");
+    let (a, b) = s.split_once(',').ok_or_else(bad)?;
+    let (a, b): (f64, f64) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    (a > 0.0 && a <= b && b <= 10.0)
+        .then_some([a, b])
+        .ok_or_else(bad)
 }
 
 #[derive(clap::Args)]
@@ -447,6 +466,7 @@ fn run(command: Command, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Re
                 all_round: a.all_round,
                 wide: a.mix == "wide",
                 camera_frame: a.frame == "camera",
+                camera_height: a.camera_height,
             },
             out,
             err,

@@ -727,6 +727,9 @@ pub struct SynthRequest {
     pub wide: bool,
     /// Write clouds in their camera's frame (`--frame camera`).
     pub camera_frame: bool,
+    /// The range the camera of mesh and model views is held at, metres (`--camera-height`);
+    /// `None` for [`afford_synth::dataset::CAMERA_HELD_M`].
+    pub camera_height: Option<[f64; 2]>,
 }
 
 /// Runs `afford synth`: with `--mesh`, one mesh that cannot be read does not stop the
@@ -749,6 +752,7 @@ pub fn run_synth(
         stride: req.stride,
         mixed_pixels: req.mixed_pixels,
         frame,
+        camera_height: req.camera_height.unwrap_or(dataset::CAMERA_HELD_M),
     };
     if let Some(labels) = &req.models {
         let s = dataset::views_of_labelled_models(labels, &req.out, req.seed, &views)?;

@@ -288,6 +288,35 @@ fn synth_refuses_furniture_options_with_given_meshes() {
     assert!(!d.path().join("out").exists());
 }
 
+/// `--camera-height` sets the camera of mesh and model views only; with furniture it is
+/// refused, and a range that is not one is refused with what was wrong.
+#[test]
+fn synth_takes_a_camera_height_for_given_meshes_only() {
+    let d = tmp();
+    let out = p(d.path(), "out");
+    let o = afford(&["synth", "--out", &out, "--camera-height", "0.5,0.9"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("--mesh"), "{}", text(&o.stderr));
+    for bad in ["0.9,0.5", "0,1", "1", "a,b", "0.5,11"] {
+        let o = afford(&[
+            "synth",
+            "--out",
+            &out,
+            "--mesh",
+            "x.ply",
+            "--camera-height",
+            bad,
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{bad}");
+        assert!(
+            text(&o.stderr).contains("MIN,MAX"),
+            "{bad}: {}",
+            text(&o.stderr)
+        );
+    }
+    assert!(!d.path().join("out").exists());
+}
+
 #[test]
 fn a_camera_frame_in_millimetres_with_auto_floor_gives_the_same_affordances() {
     use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};

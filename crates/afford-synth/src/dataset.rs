@@ -1195,8 +1195,15 @@ pub(super) fn footprint_radius(m: &Mesh) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// Lowest and highest a depth camera is held for single views, metres above the floor: a
+/// person's hands or a tripod (1.0-1.8 m). Robots carry theirs lower (0.4-1.0 m on a
+/// mobile base): `afford synth --camera-height` draws those views.
+pub const CAMERA_HELD_M: [f64; 2] = [1.0, 1.8];
+
 /// A camera at horizontal distance `dist` from `(cx, cy)` at azimuth `az` (radians,
-/// 0 = +x), height 1.0–1.8 m, looking at `(cx, cy, focus)`.
+/// 0 = +x), held between `held[0]` and `held[1]` metres high, looking at `(cx, cy,
+/// focus)`.
+#[allow(clippy::too_many_arguments)]
 fn camera_at(
     rng: &mut ChaCha8Rng,
     cx: f64,
@@ -1205,8 +1212,9 @@ fn camera_at(
     dist: f64,
     focus: f64,
     stride: u32,
+    held: [f64; 2],
 ) -> Camera {
-    let h = u(rng, 1.0, 1.8);
+    let h = u(rng, held[0], held[1]);
     Camera {
         stride,
         ..Camera::looking_at(
@@ -1372,6 +1380,7 @@ pub(super) fn one_scene(kind: SceneKind, class: Class, seed: u64, spec: &Dataset
                 dist,
                 obj.focus_height,
                 spec.stride,
+                CAMERA_HELD_M,
             ));
             let (points, parts, labels, doubtful) = render_with_visibility(
                 &scene,
@@ -1444,13 +1453,22 @@ pub(super) fn one_scene(kind: SceneKind, class: Class, seed: u64, spec: &Dataset
                 let d = ((cx - tx).powi(2) + (cy - ty).powi(2)).sqrt();
                 if d >= 1.2 {
                     let az = (cy - ty).atan2(cx - tx);
-                    cam = Some(camera_at(&mut rng, tx, ty, az, d, tf, spec.stride));
+                    cam = Some(camera_at(
+                        &mut rng,
+                        tx,
+                        ty,
+                        az,
+                        d,
+                        tf,
+                        spec.stride,
+                        CAMERA_HELD_M,
+                    ));
                     break;
                 }
             }
-            let cam = spec.seen_by(
-                cam.unwrap_or_else(|| camera_at(&mut rng, tx, ty, 0.0, 1.2, tf, spec.stride)),
-            );
+            let cam = spec.seen_by(cam.unwrap_or_else(|| {
+                camera_at(&mut rng, tx, ty, 0.0, 1.2, tf, spec.stride, CAMERA_HELD_M)
+            }));
             let (points, parts, labels, mut doubtful) =
                 render_with_visibility(&scene, &ranges, &cam, mix(seed ^ 3));
             // A low table only matters when nothing else affords sitting.
@@ -1635,16 +1653,20 @@ pub struct MeshViews {
     /// The frame each view is written in: the world's (z up, floor at z = 0) or its
     /// camera's (x right, y down, z forward).
     pub frame: OutFrame,
+    /// Lowest and highest the camera is held, metres above the floor (drawn uniformly).
+    pub camera_height: [f64; 2],
 }
 
 impl Default for MeshViews {
-    /// Three views, stride 2, no mixed pixels, in the world frame.
+    /// Three views, stride 2, no mixed pixels, in the world frame, the camera held at
+    /// [`CAMERA_HELD_M`].
     fn default() -> Self {
         MeshViews {
             views: 3,
             stride: 2,
             mixed_pixels: 0.0,
             frame: OutFrame::World,
+            camera_height: CAMERA_HELD_M,
         }
     }
 }
@@ -1681,7 +1703,16 @@ pub fn render_mesh_views(
         let az = u(&mut rng, -180.0, 180.0).to_radians();
         let dist = u(&mut rng, 1.5, 3.0) + (r - 0.5).max(0.0) * 0.8;
         let focus = (hi.z * 0.5).min(0.6);
-        let mut cam = camera_at(&mut rng, cx, cy, az, dist, focus, how.stride);
+        let mut cam = camera_at(
+            &mut rng,
+            cx,
+            cy,
+            az,
+            dist,
+            focus,
+            how.stride,
+            how.camera_height,
+        );
         cam.noise.mixed_pixels = how.mixed_pixels;
         let (mut cloud, _) = render_view_triangles(&scene, &cam, mix(seed ^ k as u64 ^ 7));
         if how.frame == OutFrame::Camera {
@@ -2423,5 +2454,35 @@ mod tests {
             assert!((dw - dc).abs() < 1e-3, "{dw} {dc}");
         }
         assert!((camera[0] - world[0]).norm() > 0.1);
+    }
+
+    /// `camera_height` sets how high the camera is held: above the 0.5 m cube it sees the
+    /// cube's top, held below the top it sees none of it (at most its edges), as a robot's
+    /// camera sees a desk or a cabinet.
+    #[test]
+    fn mesh_views_are_seen_from_the_camera_height_asked() {
+        let d = tempfile::tempdir().unwrap();
+        let mesh = d.path().join("cube.ply");
+        cube_ply(&mesh);
+        let on_top = |name: &str, camera_height: [f64; 2]| {
+            let how = MeshViews {
+                views: 2,
+                camera_height,
+                ..MeshViews::default()
+            };
+            let files = render_mesh_views(&mesh, &d.path().join(name), 4, &how).unwrap();
+            files
+                .iter()
+                .map(|f| {
+                    let top = cloud::read_ply(f).unwrap();
+                    top.iter()
+                        .filter(|p| (p.z - 0.5).abs() < 0.01 && p.x.abs().max(p.y.abs()) < 0.2)
+                        .count()
+                })
+                .min()
+                .unwrap()
+        };
+        assert!(on_top("high", [1.5, 1.8]) > 100);
+        assert_eq!(on_top("low", [0.3, 0.4]), 0);
     }
 }
