@@ -225,24 +225,31 @@ pub(crate) fn component_roots(
     n: usize,
     neighbour: impl Fn(usize, (i64, i64, i64)) -> Option<usize>,
 ) -> Vec<usize> {
-    // The root of `x`, halving the path on the way.
-    fn root(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    }
     let mut parent: Vec<usize> = (0..n).collect();
     for i in 0..n {
         for d in HALF_NEIGHBOURS {
             if let Some(j) = neighbour(i, d) {
-                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-                parent[a.max(b)] = a.min(b);
+                join(&mut parent, i, j);
             }
         }
     }
-    (0..n).map(|i| root(&mut parent, i)).collect()
+    (0..n).map(|i| find(&mut parent, i)).collect()
+}
+
+/// The root of `x` in the union-find forest `parent`, halving the path on the way.
+pub(crate) fn find(parent: &mut [usize], mut x: usize) -> usize {
+    while parent[x] != x {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    x
+}
+
+/// Joins the sets of `a` and `b` in the union-find forest `parent`, the smaller root
+/// becoming the parent (so each set's root is its least member).
+pub(crate) fn join(parent: &mut [usize], a: usize, b: usize) {
+    let (a, b) = (find(parent, a), find(parent, b));
+    parent[a.max(b)] = a.min(b);
 }
 
 /// `f` run on a pool of `threads` threads, for tests that compare results across thread

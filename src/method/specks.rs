@@ -33,7 +33,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use nalgebra::Point3;
 use rayon::prelude::*;
 
-use crate::cellhash::{component_roots, offset_key, CellMap, CellSet, CubeBox};
+use crate::cellhash::{component_roots, find, join, offset_key, CellMap, CellSet, CubeBox};
 use crate::cloud::PointCloud;
 
 /// For each point of `points`, whether it belongs to a speck: a component of at most
@@ -231,23 +231,9 @@ fn small_components(
 }
 
 /// The most cubes along each axis [`small_components`] looks for a line through a cube:
-/// 4 (729 offsets a cube of a small component), a bound on time for any `line`.
+/// 4 (351 pairs of opposite offsets for each cube of a small component), a bound on time
+/// for any `line`.
 const MAX_LINE: i64 = 4;
-
-/// The root of `x` in the union-find `parent`, halving the path on the way.
-fn find(parent: &mut [usize], mut x: usize) -> usize {
-    while parent[x] != x {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    x
-}
-
-/// Joins the sets of `a` and `b` in `parent`, the smaller root becoming the parent.
-fn join(parent: &mut [usize], a: usize, b: usize) {
-    let (a, b) = (find(parent, a), find(parent, b));
-    parent[a.max(b)] = a.min(b);
-}
 
 /// For each point of `points`, whether its cube of edge `cell` metres is one of `cubes`
 /// (all `false` when there are none, without looking).
