@@ -2233,9 +2233,9 @@ mod tests {
             assert_eq!(occupied_keys(&cloud, origin, v), want, "{round}");
         }
     }
-    /// `sort_keys` against `sort_unstable_by_key(zyx)` on seeded key sets: small and large sets, narrow
-    /// and wide spans (up to exactly 64 bits together, and past them), negative keys,
-    /// repeats, and keys at the ends of `i64`.
+    /// `sort_keys` against `sort_unstable_by_key(zyx)` on seeded key sets: small and large
+    /// sets, narrow and wide spans (up to exactly 64 bits together, and past them),
+    /// negative keys, repeats, and keys at the ends of `i64`.
     #[test]
     fn sort_keys_equals_sort_unstable() {
         let mut state = 11u64;
