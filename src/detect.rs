@@ -188,6 +188,24 @@ pub struct Prepared {
     /// ([`crate::method::holes`]), then the seats hidden behind backs and arms
     /// ([`crate::method::hidden`]); their cells are set in `map` and occupied in `scene`.
     pub filled: Vec<Hole>,
+    /// The height map with the holes filled but not the hidden seats, for the hierarchies
+    /// that take none ([`crate::model::hierarchy::HypothesisRule::hidden_seats`]): their
+    /// places and the surfaces round them are looked for where the scan saw something,
+    /// while their bodies meet the same scene; `None` where no hidden seat was filled, and
+    /// then `map` serves them too.
+    pub without_hidden: Option<HeightMap>,
+}
+
+impl Prepared {
+    /// The height map a hierarchy's places are found on: with the hidden seats filled
+    /// where `hidden_seats`
+    /// ([`crate::model::hierarchy::HypothesisRule::hidden_seats`]), else without them.
+    pub fn map_for(&self, hidden_seats: bool) -> &HeightMap {
+        match &self.without_hidden {
+            Some(map) if !hidden_seats => map,
+            _ => &self.map,
+        }
+    }
 }
 
 /// Builds the height map and the voxelised scene once for a cloud. The two are
@@ -217,9 +235,12 @@ fn prepare_spaced(
     // The holes the scan closes round are filled, then the seats hidden inside the backs
     // and arms that hid them: their cells valid in the map, their voxels occupied in a
     // scene built again with the fill.
+    // A hierarchy that takes no hidden seats looks for its places on the map with the
+    // holes alone filled, kept aside where hidden seats are filled.
     let mut found = holes(&map, &cfg.holes);
     fill(&mut map, &found);
     let hidden = hidden_seats(&map, &seen.points, &cfg.hidden);
+    let without_hidden = (!hidden.is_empty()).then(|| map.clone());
     fill(&mut map, &hidden);
     found.extend(hidden);
     if found.is_empty() {
@@ -227,6 +248,7 @@ fn prepare_spaced(
             map,
             scene,
             filled: found,
+            without_hidden,
         };
     }
     let fill_at = fill_points(&map, &found, cfg.scene.voxel_size);
@@ -235,6 +257,7 @@ fn prepare_spaced(
         map,
         scene,
         filled: found,
+        without_hidden,
     }
 }
 
@@ -418,7 +441,8 @@ fn find(
     cfg: &DetectConfig,
     grid: &OnceLock<SegmentGrid>,
 ) -> Found {
-    let hyps = hypotheses(&prepared.map, &h.hypothesis, h.orientation, agent.height);
+    let map = prepared.map_for(h.hypothesis.hidden_seats);
+    let hyps = hypotheses(map, &h.hypothesis, h.orientation, agent.height);
     let radius = h.suppression_radius * agent.height;
     // The best pose at each hypothesis of `at` (indices into `hyps`), as candidates
     // (hypothesis, pose), with the number of fits tried.

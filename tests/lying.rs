@@ -439,3 +439,53 @@ fn a_child_and_an_adult_run_in_one_pass_over_one_scene() {
     );
     assert!(out[1].detections.iter().all(|d| d.agent == "child"));
 }
+
+#[test]
+fn a_seat_hidden_behind_its_back_is_for_hierarchies_that_take_hidden_seats() {
+    // A three-seat sofa seen from behind and above: its back, the tops of its arms and the
+    // floor behind and beside it; the seat never seen, nor anything in front of it (the
+    // image ends there). The seat hidden inside the back and the arms is filled for
+    // sitting; lying takes no hidden seat (a bed is a surface the scan saw), and a
+    // hierarchy switched the same way finds no seat here.
+    let mut m = floor(-2.0, -2.0, 2.5, 2.0);
+    m.append(&sofa(&SofaParams::default()));
+    let c = seen_where(&cloud(&m), |p| {
+        let arm_top = p.y.abs() > 0.825 && p.z > 0.62;
+        let floor_beside = p.z < 0.01 && p.x < 0.3 && p.y.abs() > 1.2;
+        p.x < -0.27 || arm_top || floor_beside
+    });
+    let cfg = DetectConfig::default();
+    let prepared = prepare(&c, &cfg);
+    // The map's cell at the seat's middle, (0, 0).
+    let cell = |map: &afford::method::heightmap::HeightMap| {
+        let (ix, iy) = (0..map.ny)
+            .flat_map(|iy| (0..map.nx).map(move |ix| (ix, iy)))
+            .find(|&(ix, iy)| {
+                let (x, y) = map.centre(ix, iy);
+                x.abs() <= map.cell / 2.0 && y.abs() <= map.cell / 2.0
+            })
+            .expect("the seat's middle in the map");
+        map.get(ix as isize, iy as isize)
+    };
+    let filled = cell(prepared.map_for(true)).expect("the hidden seat filled");
+    assert!((0.40..0.55).contains(&filled), "filled at {filled}");
+    assert_eq!(cell(prepared.map_for(false)), None);
+    let agent = Agent::load(Path::new("agents/human.toml"), 1.75).unwrap();
+    let mut sitting = Hierarchy::load(Path::new("affordances/sitting.toml"), &agent).unwrap();
+    assert!(sitting.hypothesis.hidden_seats);
+    // Seats between the arms (the arms' tops, 0.63 m high, are perched on either way).
+    let on_seat = |o: &Outcome| {
+        o.detections
+            .iter()
+            .filter(|d| d.seat.y.abs() < 0.8 && d.seat.z < 0.55)
+            .count()
+    };
+    let sat = detect(&c, &agent, &sitting, &cfg);
+    assert!(on_seat(&sat) > 0, "{:?}", sat.detections);
+    sitting.hypothesis.hidden_seats = false;
+    let unseen = detect(&c, &agent, &sitting, &cfg);
+    assert_eq!(on_seat(&unseen), 0, "{:?}", unseen.detections);
+    let (agent, h) = lying(1.75);
+    assert!(!h.hypothesis.hidden_seats);
+    assert!(affords(&detect(&c, &agent, &h, &cfg)).is_empty());
+}

@@ -856,6 +856,7 @@ mod tests {
             spacing: None,
             surface: None,
             perch: None,
+            hidden_seats: true,
         }
     }
 

@@ -83,6 +83,12 @@ pub struct HypothesisRule {
     /// (a bar stool); absent: `height` alone.
     #[serde(default)]
     pub perch: Option<PerchRule>,
+    /// Whether the places and the scene hold the seats hidden behind backs and arms
+    /// ([`crate::method::hidden`]; an extension): a seat inferred from the walls that hid
+    /// it, at their level less a drop, as wide as their hull. Absent: true. Without them
+    /// the hierarchy sees the scan with its holes filled only.
+    #[serde(default = "yes")]
+    pub hidden_seats: bool,
 }
 
 /// Seats above the comfortable height that a person perches on, told from table tops by
