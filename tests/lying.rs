@@ -47,11 +47,15 @@ fn affords(o: &Outcome) -> Vec<String> {
 }
 
 fn check(m: &Mesh, expected: &[&str]) {
-    let c = cloud(m);
+    check_cloud(&cloud(m), expected);
+}
+
+/// [`check`] on a cloud already sampled.
+fn check_cloud(c: &PointCloud, expected: &[&str]) {
     // The extremes of the heights the paper evaluates (1.75 m lies between them).
     for height in [1.65, 1.85] {
         let (agent, h) = lying(height);
-        let o = detect(&c, &agent, &h, &DetectConfig::default());
+        let o = detect(c, &agent, &h, &DetectConfig::default());
         assert_eq!(
             affords(&o),
             expected,
@@ -488,4 +492,27 @@ fn a_seat_hidden_behind_its_back_is_for_hierarchies_that_take_hidden_seats() {
     let (agent, h) = lying(1.75);
     assert!(!h.hypothesis.hidden_seats);
     assert!(affords(&detect(&c, &agent, &h, &cfg)).is_empty());
+}
+
+#[test]
+fn a_tall_bed_is_lain_on_by_every_body_and_a_table_by_none() {
+    // A bed whose mattress top stands 0.67 m high (a box-spring bed with its duvet; the
+    // lying height membership is in metres, half at 0.69 m) affords lying for the 1.65 m
+    // body as for the 1.85 m one; a table top 0.74 m high, as long and wide as a bed,
+    // for neither. The bed as a camera sees it, a solid block: the full model's inner
+    // faces put the frame's top 0.22 m under the mattress's, a gap the height map takes
+    // for the room under a roof.
+    let tall = bed(&BedParams {
+        mattress_height: 0.67,
+        headboard_height: 0.0,
+        ..BedParams::default()
+    });
+    let seen = solid(&cloud(&tall), -1.0..1.0, -0.7..0.7, 0.67);
+    check_cloud(&seen, &["lying", "elongated_body", "stretched_legs"]);
+    let table = table(&TableParams {
+        length: 2.0,
+        width: 1.0,
+        ..TableParams::default()
+    });
+    check(&table, &[]);
 }

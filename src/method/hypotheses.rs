@@ -72,7 +72,11 @@ fn hypotheses_in_pieces(
         let rise = sr.rise.unwrap_or(sr.tolerance);
         (sr, rise, map.disc(sr.radius * body_height))
     });
-    let height = rule_.height.map(|t| t.scaled(body_height));
+    // The membership in fractions of H, or in metres as it is.
+    let height = rule_
+        .height
+        .map(|t| t.scaled(body_height))
+        .or(rule_.height_m);
     let perch = rule_.perch.map(|p| Perch::new(&p, map, body_height));
     let facing_tolerance = rule_.facing_tolerance.unwrap_or(0.0);
     // A direction across the surface (descent, facing) as the body's heading.
@@ -852,6 +856,7 @@ mod tests {
                 c: 0.5,
                 d: 0.6,
             }),
+            height_m: None,
             available: Availability { rise: [0.3, 0.7] },
             spacing: None,
             surface: None,

@@ -67,6 +67,11 @@ pub struct HypothesisRule {
     /// absent to switch the height membership off.
     #[serde(default)]
     pub height: Option<Trapezoid>,
+    /// The same membership in metres, whatever the body's height (an extension, instead
+    /// of `height`, never with it): for surfaces whose usable heights are the furniture's,
+    /// not the body's (beds up to about 0.70 m, tables from 0.72 m).
+    #[serde(default)]
+    pub height_m: Option<Trapezoid>,
     /// The availability sets used for defuzzification (Fig. 5d).
     pub available: Availability,
     /// Distance between the cells tried, fraction of H (an extension: a lying body is
@@ -1103,8 +1108,17 @@ fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
         ),
         (hyp.key("available"), h.available.rise.to_vec()),
     ];
+    if h.height.is_some() && h.height_m.is_some() {
+        return Err(src.invalid(
+            &hyp.key("height_m"),
+            "is `height` in metres: give one of the two, not both".to_string(),
+        ));
+    }
     if let Some(t) = h.height {
         sets.push((hyp.key("height"), vec![t.a, t.b, t.c, t.d]));
+    }
+    if let Some(t) = h.height_m {
+        sets.push((hyp.key("height_m"), vec![t.a, t.b, t.c, t.d]));
     }
     if let Some(p) = h.perch {
         let perch = hyp.key("perch");
@@ -1939,6 +1953,29 @@ mod tests {
             "height = [0.14, 0.34, 0.21, 0.40]",
         );
         names(&e, line, "hypothesis.height", "increasing order");
+    }
+
+    #[test]
+    fn a_height_membership_in_metres_is_taken_as_it_is_and_never_beside_one_in_h() {
+        let lying = crate::model::set::BUILTIN_LYING;
+        let m = "height_m = [0.09, 0.18, 0.665, 0.72]";
+        assert_eq!(lying.matches(m).count(), 1);
+        let h = load(lying).unwrap().hypothesis;
+        assert_eq!((h.height, h.height_m.map(|t| t.d)), (None, Some(0.72)));
+        let both = lying.replace(m, &format!("height = [0.05, 0.10, 0.36, 0.40]\n{m}"));
+        names(
+            &error(&both),
+            line_of(&both, m, 0),
+            "hypothesis.height_m",
+            "not both",
+        );
+        let unordered = lying.replace(m, "height_m = [0.09, 0.665, 0.18, 0.72]");
+        names(
+            &error(&unordered),
+            line_of(&unordered, "height_m = [0.09, 0.665", 0),
+            "hypothesis.height_m",
+            "increasing order",
+        );
     }
 
     #[test]
