@@ -40,7 +40,12 @@ fn main() {
     let cfg = DetectConfig::default();
     let prepared =
         prepare_guarded(Path::new(path), &cloud, &cfg).unwrap_or_else(|e| fail(e.to_string()));
-    let all = hypotheses(&prepared.map, &h.hypothesis, h.orientation, body);
+    let all = hypotheses(
+        prepared.map_for(h.hypothesis.hidden_seats),
+        &h.hypothesis,
+        h.orientation,
+        body,
+    );
     let off = |p: &Hypothesis| (p.position.x - x).hypot(p.position.y - y);
     let Some(near) = all.iter().min_by(|p, q| off(p).total_cmp(&off(q))) else {
         fail(format!("{path}: no hypothesis of `{}`", h.name));

@@ -234,9 +234,9 @@ fn prepare_spaced(
     );
     // The holes the scan closes round are filled, then the seats hidden inside the backs
     // and arms that hid them: their cells valid in the map, their voxels occupied in a
-    // scene built again with the fill.
-    // A hierarchy that takes no hidden seats looks for its places on the map with the
-    // holes alone filled, kept aside where hidden seats are filled.
+    // scene built again with the fill. A hierarchy that takes no hidden seats looks for
+    // its places on the map with the holes alone filled, kept aside where hidden seats
+    // are filled.
     let mut found = holes(&map, &cfg.holes);
     fill(&mut map, &found);
     let hidden = hidden_seats(&map, &seen.points, &cfg.hidden);

@@ -663,7 +663,7 @@ pub fn run_inspect(
         .first()
         .map(|m| {
             afford::method::hypotheses::hypotheses(
-                &prepared.map,
+                prepared.map_for(m.hierarchy.hypothesis.hidden_seats),
                 &m.hierarchy.hypothesis,
                 m.hierarchy.orientation,
                 m.agent.height,
