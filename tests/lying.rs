@@ -139,6 +139,7 @@ fn unfolded_with(
         memberships: [1.0; 3],
         risen: false,
         unseen_width,
+        flat_axes: Vec::new(),
     };
     let fits = fit(agent, h, &prepared.scene, &hyp, &cfg.contact);
     let f = fits
@@ -515,4 +516,91 @@ fn a_tall_bed_is_lain_on_by_every_body_and_a_table_by_none() {
         ..TableParams::default()
     });
     check(&table, &[]);
+}
+
+/// The lying hierarchy with its `flat` rule set as `rule` (a line of `[hypothesis]`).
+fn lying_with_flat(height: f64, rule: &str) -> (Agent, Hierarchy) {
+    let agent = Agent::load(Path::new("agents/human.toml"), height).unwrap();
+    let path = Path::new("affordances/lying.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let text = text.replacen(
+        "hidden_seats = false",
+        &format!("hidden_seats = false\n{rule}"),
+        1,
+    );
+    let h = Hierarchy::from_toml(&text, path, &agent).unwrap();
+    (agent, h)
+}
+
+/// An L sofa: two seats 0.6 m deep at 0.45 m meeting at a corner square, 2 m long each
+/// from the corner's outer side, with backs 0.85 m high and 0.2 m thick behind them.
+fn l_sofa() -> Mesh {
+    let mut m = Mesh::new();
+    let seat = |m: &mut Mesh, a: Point3<f64>, b: Point3<f64>| m.add_box(a, b, Part::Seat);
+    seat(
+        &mut m,
+        Point3::new(-2.0, 0.0, 0.0),
+        Point3::new(0.6, 0.6, 0.45),
+    );
+    seat(
+        &mut m,
+        Point3::new(0.0, -2.0, 0.0),
+        Point3::new(0.6, 0.0, 0.45),
+    );
+    m.add_box(
+        Point3::new(-2.0, 0.6, 0.0),
+        Point3::new(0.8, 0.8, 0.85),
+        Part::Backrest,
+    );
+    m.add_box(
+        Point3::new(0.6, -2.0, 0.0),
+        Point3::new(0.8, 0.6, 0.85),
+        Part::Backrest,
+    );
+    m
+}
+
+#[test]
+fn a_flat_rectangle_keeps_bodies_off_an_l_sofas_corner_and_on_a_bed() {
+    let rule = "flat = { length = 0.6, middle = 0.05, square = 15.0, off = 0.05, shift = 0.25, turn = 15.0 }";
+    let sofa = cloud(&l_sofa());
+    let bed = cloud(
+        &bed(&BedParams {
+            width: 0.9,
+            headboard_height: 0.0,
+            ..BedParams::default()
+        })
+        .placed(0.0, 0.0, 25.0),
+    );
+    for height in [1.65, 1.85] {
+        // The seats' spread at the corner is a bed's width across the diagonal: without the
+        // rule a body is laid there.
+        let (agent, plain) = lying(height);
+        let o = detect(&sofa, &agent, &plain, &DetectConfig::default());
+        assert!(
+            affords(&o).contains(&"lying".to_string()),
+            "{height}: {:?}",
+            o.stats
+        );
+        // With it, no flat rectangle 0.4 H wide lies there; on a bed one does.
+        let (agent, flat) = lying_with_flat(height, rule);
+        let o = detect(&sofa, &agent, &flat, &DetectConfig::default());
+        assert_eq!(
+            affords(&o),
+            Vec::<String>::new(),
+            "{height}: {:?} {:?}",
+            o.stats,
+            o.detections
+                .iter()
+                .map(|d| (d.position, d.yaw))
+                .collect::<Vec<_>>()
+        );
+        let o = detect(&bed, &agent, &flat, &DetectConfig::default());
+        assert_eq!(
+            affords(&o),
+            ["lying", "elongated_body", "stretched_legs"],
+            "{height}: {:?}",
+            o.stats
+        );
+    }
 }

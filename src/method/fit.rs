@@ -143,7 +143,8 @@ pub fn lower_half(c: &Cylinder) -> Cylinder {
 /// [`fit`] with the links `unchecked` left out of the collision tests and the links
 /// `halved` tested by their [`lower_half`]: the headings of [`headings`], then, if none
 /// of them was free, all round from [`Hypothesis::facing`] (else the place's own
-/// heading), those fits marked [`Fit::turned`].
+/// heading), those fits marked [`Fit::turned`]. Either way only headings along the
+/// place's flat rectangles ([`Hypothesis::flat_axes`]) where it has them.
 fn fit_checking(
     agent: &Agent,
     h: &Hierarchy,
@@ -154,7 +155,10 @@ fn fit_checking(
     halved: &[usize],
 ) -> Vec<Fit> {
     let links = Links { unchecked, halved };
-    let first = headings(h, hyp);
+    let first: Vec<f64> = headings(h, hyp)
+        .into_iter()
+        .filter(|&y| along_flat(h, hyp, y))
+        .collect();
     let (fits, any_free) = fit_headings(agent, h, scene, hyp, &first, contact, &links);
     let Some(own) = own_heading(hyp).filter(|_| !any_free) else {
         return fits;
@@ -163,6 +167,7 @@ fn fit_checking(
     let rest: Vec<f64> = all_round(hyp.facing.unwrap_or(own), h.fit.fallback_yaw_step)
         .into_iter()
         .filter(|y| tried.iter().all(|t| angle_between(*t, *y) > 1e-6))
+        .filter(|&y| along_flat(h, hyp, y))
         .collect();
     let mut turned = fit_headings(agent, h, scene, hyp, &rest, contact, &links).0;
     for f in &mut turned {
@@ -191,6 +196,20 @@ impl Links<'_> {
             }
         }
     }
+}
+
+/// Whether heading `yaw` (radians) lies along one of the place's flat rectangles
+/// ([`Hypothesis::flat_axes`], either way along it), within half the step between their
+/// orientations (the hierarchy's `flat` rule); true where the place has none.
+fn along_flat(h: &Hierarchy, hyp: &Hypothesis, yaw: f64) -> bool {
+    let Some(flat) = h.hypothesis.flat.filter(|_| !hyp.flat_axes.is_empty()) else {
+        return true;
+    };
+    let half_step = flat.turn.to_radians() / 2.0 + 1e-9;
+    hyp.flat_axes.iter().any(|&a| {
+        angle_between(a, yaw) <= half_step
+            || angle_between(a + std::f64::consts::PI, yaw) <= half_step
+    })
 }
 
 fn angle_between(a: f64, b: f64) -> f64 {
@@ -357,6 +376,7 @@ mod tests {
             memberships: [1.0; 3],
             risen: false,
             unseen_width: false,
+            flat_axes: Vec::new(),
         }
     }
 

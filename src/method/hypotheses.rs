@@ -5,7 +5,7 @@ use nalgebra::{Matrix3, Point3, Vector3};
 
 use crate::method::fuzzy::{rule, Trapezoid};
 use crate::method::heightmap::{Cells, HeightMap};
-use crate::model::hierarchy::{HypothesisRule, Orientation, PerchRule};
+use crate::model::hierarchy::{FlatRule, HypothesisRule, Orientation, PerchRule};
 use crate::num::{to_isize, to_usize};
 use rayon::prelude::*;
 
@@ -41,6 +41,10 @@ pub struct Hypothesis {
     /// lengthwise by the image edge): its width is unknown. Such a place may not also
     /// leave the legs over unseen space (the node's `unseen_sweeps`).
     pub unseen_width: bool,
+    /// Where the hierarchy asks a flat rectangle round the place (its `flat` rule), the
+    /// orientations (radians about z, in `[0, pi)`) along which one lies there: the body
+    /// is laid along one of them ([`crate::method::fit`]). Empty: any heading.
+    pub flat_axes: Vec<f64>,
 }
 
 /// Rates every valid cell of `map` with the rule of section 4.1 for an agent of body
@@ -171,6 +175,21 @@ fn hypotheses_in_pieces(
                 (Some(d), Some(f)) if rule_.facing_overrules && (d - f).cos() < 0.0 => Some(f),
                 (d, _) => d,
             };
+            // A flat rectangle along the body: the orientations it lies along, or none.
+            let mut flat_axes = Vec::new();
+            if let (Some(flat), Some((sr, rise, _))) = (&rule_.flat, &shape) {
+                flat_axes = flat_rectangles(
+                    map,
+                    (ix, iy),
+                    (mean, sr.tolerance, *rise),
+                    sr.min_width * body_height,
+                    flat,
+                    body_height,
+                );
+                if flat_axes.is_empty() {
+                    continue;
+                }
+            }
             let (x, y) = map.centre(ix, iy);
             out.push(Hypothesis {
                 cell: (ix, iy),
@@ -182,6 +201,7 @@ fn hypotheses_in_pieces(
                 memberships,
                 risen,
                 unseen_width,
+                flat_axes,
             });
         }
     };
@@ -706,6 +726,94 @@ pub fn open_across(
     })
 }
 
+/// The orientations (radians about z, the rule's `turn` apart in `[0, pi)`) along which a
+/// flat rectangle lies round cell `(ix, iy)` of `map` ([`FlatRule`]): `width` metres
+/// across and the rule's `length` (fraction of `body_height`, metres) along, centred on
+/// the cell along it and shifted across by up to the rule's `shift` (whole cells), with at
+/// most the rule's `off` share of its samples (one per cell, on a grid turned with it)
+/// seen off `level` (metres): more than `tolerance` below it, or more than `rise` (the
+/// folds of a duvet) above it. Unseen cells, and cells outside the map, are no edge (a
+/// hole in the scan, a bed cut by the image edge).
+pub fn flat_rectangles(
+    map: &HeightMap,
+    (ix, iy): (usize, usize),
+    (level, tolerance, rise): (f64, f64, f64),
+    width: f64,
+    rule: &FlatRule,
+    body_height: f64,
+) -> Vec<f64> {
+    let cell = map.cell;
+    let half_along = to_isize((rule.length * body_height / 2.0 / cell).round());
+    let half_across = to_isize((width / 2.0 / cell).round());
+    let shifts = to_isize((rule.shift / cell).floor());
+    let samples = (2 * half_along + 1) * (2 * half_across + 1);
+    let most_off = to_isize((rule.off * samples as f64).floor());
+    let rises = rise.max(tolerance);
+    let middle = to_isize((rule.middle * body_height / cell).floor());
+    let square = width * rule.square.to_radians().tan() / cell;
+    let turns = to_isize((180.0 / rule.turn).round()).max(1);
+    (0..turns)
+        .map(|k| (k as f64 * rule.turn).to_radians())
+        .filter(|theta| {
+            let (ax, ay) = (theta.cos(), theta.sin());
+            (-shifts..=shifts).any(|s| {
+                let mut off = 0;
+                // Per end (towards -i, towards +i): the nearest rise's |i| beyond the
+                // middle over the columns that have one (least, most), and how many
+                // columns are seen there without one.
+                let mut ends = [(isize::MAX, isize::MIN, 0usize); 2];
+                for j in -half_across + s..=half_across + s {
+                    let mut first = [None::<isize>; 2];
+                    let mut seen_end = [false; 2];
+                    for i in -half_along..=half_along {
+                        let (fx, fy) =
+                            (i as f64 * ax - j as f64 * ay, i as f64 * ay + j as f64 * ax);
+                        let Some(h) = map.get(
+                            ix as isize + to_isize(fx.round()),
+                            iy as isize + to_isize(fy.round()),
+                        ) else {
+                            continue;
+                        };
+                        let d = h - level;
+                        let end = (i.abs() > middle).then_some(usize::from(i > 0));
+                        if let Some(e) = end {
+                            seen_end[e] = true;
+                        }
+                        match end {
+                            Some(e) if d > rises => {
+                                first[e] = Some(first[e].map_or(i.abs(), |f| f.min(i.abs())));
+                            }
+                            _ if d < -tolerance || d > rises => {
+                                off += 1;
+                                if off > most_off {
+                                    return false;
+                                }
+                            }
+                            _ => {}
+                        }
+                    }
+                    for e in 0..2 {
+                        match first[e] {
+                            Some(a) => ends[e] = (ends[e].0.min(a), ends[e].1.max(a), ends[e].2),
+                            None if seen_end[e] => ends[e].2 += 1,
+                            None => {}
+                        }
+                    }
+                }
+                // A rise at an end runs square across the whole width (a reclined back,
+                // a raised leg rest), not along a side or into a corner.
+                if ends
+                    .iter()
+                    .any(|&(lo, hi, open)| hi >= lo && (open > 0 || (hi - lo) as f64 > square))
+                {
+                    return false;
+                }
+                true
+            })
+        })
+        .collect()
+}
+
 /// [`surface`] (folds up to `rise` above `level` crossed), with the share of its bounding
 /// cells that do not drop at least `rim` metres below `level` as [`SurfaceShape::walled`]:
 /// a stool's top drops to the floor or its ring all round, a box on a desk to the desk. With `longest` (metres), a surface
@@ -860,6 +968,7 @@ mod tests {
             available: Availability { rise: [0.3, 0.7] },
             spacing: None,
             surface: None,
+            flat: None,
             perch: None,
             hidden_seats: true,
         }
@@ -873,6 +982,88 @@ mod tests {
     fn map_of(n: usize, f: impl Fn(usize, usize) -> Option<f64>) -> HeightMap {
         let heights: Vec<Option<f64>> = (0..n * n).map(|i| f(i % n, i / n)).collect();
         HeightMap::from_dense(0.0, 0.0, 0.05, n, n, &heights)
+    }
+
+    /// The lying hierarchy's flat rectangle with the given `middle`, and its width (0.70 m).
+    fn flat_rule() -> (FlatRule, f64) {
+        let rule = FlatRule {
+            length: 0.6,
+            middle: 0.05,
+            square: 15.0,
+            off: 0.05,
+            shift: 0.25,
+            turn: 15.0,
+        };
+        (rule, 0.40 * 1.75)
+    }
+
+    /// The orientations (degrees) of the flat rectangles round the centre of a 60 x 60
+    /// map of 5 cm cells (3 m square) with heights `f(x, y)` in metres from its centre.
+    fn flat_axes_of(f: impl Fn(f64, f64) -> Option<f64>) -> Vec<isize> {
+        let m = map_of(60, |ix, iy| {
+            f(ix as f64 * 0.05 - 1.5, iy as f64 * 0.05 - 1.5)
+        });
+        let (rule, width) = flat_rule();
+        flat_rectangles(&m, (30, 30), (0.45, 0.05, 0.10), width, &rule, 1.75)
+            .into_iter()
+            .map(|a| to_isize(a.to_degrees().round()))
+            .collect()
+    }
+
+    #[test]
+    fn a_body_lies_on_a_flat_rectangle_along_a_bed_and_not_into_a_seats_corner() {
+        let floor = Some(0.0);
+        // A bed 2 m x 0.9 m along x, its top at 0.45 m: flat along it (0 deg), and
+        // 15 deg either way, where 0.70 m still fits across; not across it.
+        let bed = flat_axes_of(|x, y| {
+            Some(if x.abs() < 1.0 && y.abs() < 0.45 {
+                0.45
+            } else {
+                0.0
+            })
+        });
+        assert!(bed.contains(&0) && !bed.contains(&90), "{bed:?}");
+        // The same with the floor unseen round it (a depth view's shadow): the same.
+        let shadowed = flat_axes_of(|x, y| (x.abs() < 1.0 && y.abs() < 0.45).then_some(0.45));
+        assert!(shadowed.contains(&0), "{shadowed:?}");
+        // An L sofa's corner: seats 0.6 m deep along -x and -y from the corner, backs
+        // 0.85 m high behind them; the place near the corner (the centre). Its seat
+        // spreads wider than a bed across the diagonal, but no rectangle is flat.
+        let l_sofa = |x: f64, y: f64| {
+            let seat = x < 0.15 && y < 0.15 && (x > -0.45 || y > -0.45);
+            let back =
+                ((0.15..0.35).contains(&y) && x < 0.35) || ((0.15..0.35).contains(&x) && y < 0.35);
+            Some(if back {
+                0.85
+            } else if seat {
+                0.45
+            } else {
+                0.0
+            })
+        };
+        assert_eq!(flat_axes_of(l_sofa), Vec::<isize>::new());
+        // A wide recliner along x: a 0.8 m wide seat with its back rising square across
+        // it 0.15 m behind the place: flat along x, the rise at the end.
+        let recliner = |x: f64, y: f64| {
+            if y.abs() >= 0.4 || x.abs() >= 1.0 {
+                return floor;
+            }
+            Some(if x < -0.15 {
+                0.45 + (-0.15 - x) * 0.8
+            } else {
+                0.45
+            })
+        };
+        assert!(flat_axes_of(recliner).contains(&0));
+        // The same rise running along one side of the end instead (a sofa's back beside
+        // the legs): not flat along x.
+        let side = |x: f64, y: f64| {
+            if y.abs() >= 0.4 || x.abs() >= 1.0 {
+                return floor;
+            }
+            Some(if x < -0.15 && y > 0.1 { 0.85 } else { 0.45 })
+        };
+        assert!(!flat_axes_of(side).contains(&0), "{:?}", flat_axes_of(side));
     }
 
     #[test]

@@ -83,6 +83,11 @@ pub struct HypothesisRule {
     /// no width asked and every heading tried where it is flat.
     #[serde(default)]
     pub surface: Option<SurfaceRule>,
+    /// A flat rectangle of the surface's least width round the place (an extension, with
+    /// `surface` only): the body's middle lies on a level surface as wide as a bed, not
+    /// across a corner or a seat's front; absent: the width alone is asked.
+    #[serde(default)]
+    pub flat: Option<FlatRule>,
     /// A second height membership for small tops (an extension): where the top round the
     /// place is no longer than a stool's, a seat higher than `height` allows is perched on
     /// (a bar stool); absent: `height` alone.
@@ -155,6 +160,32 @@ pub struct SurfaceRule {
     /// `None`: nothing ends it.
     #[serde(default)]
     pub face: Option<f64>,
+}
+
+/// A flat rectangle round a place (an extension of section 4.1, with [`SurfaceRule`]): the
+/// surface's least width (`min_width`) across and `length` along, at the place's level
+/// (its `tolerance` below, its `rise` above; unseen cells are no edge), in one of the
+/// orientations `turn` apart, shifted across by up to `shift`. The width of the surface
+/// round the place (the spread of its cells) passes where two seats meet at a corner; a
+/// body lies on a rectangle, and is laid along one that is flat ([`crate::method::hypotheses::flat_rectangles`]).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlatRule {
+    /// Length of the rectangle along the body, centred on the place, fraction of H.
+    pub length: f64,
+    /// Half the length of the rectangle's middle, fraction of H: a rise there is off the
+    /// level; beyond it, at an end, a rise is the surface going up (a reclined back, a
+    /// raised leg rest) where it runs across the whole width.
+    pub middle: f64,
+    /// Largest angle, degrees, between such a rise and the rectangle's width.
+    pub square: f64,
+    /// Largest share of the rectangle's samples (one per cell) seen off its level.
+    pub off: f64,
+    /// Furthest the rectangle's centre line is shifted across from the place, metres.
+    pub shift: f64,
+    /// Step between the orientations tried, degrees (over half a turn); a body is laid
+    /// within half of it of one that is flat.
+    pub turn: f64,
 }
 
 /// Parameters of the initial agent fitting (section 4.2).
@@ -1093,6 +1124,37 @@ fn check_numbers(file: &File, src: Source) -> Result<(), ModelError> {
             ));
         }
     }
+    if let Some(a) = h.flat {
+        let flat = hyp.key("flat");
+        if h.surface.is_none() {
+            return Err(src.invalid(
+                &flat,
+                "needs the surface rule ([hypothesis] surface): the rectangle is as wide as its min_width",
+            ));
+        }
+        for (key, v, bound) in [
+            ("length", a.length, Positive),
+            ("middle", a.middle, NonNegative),
+            ("off", a.off, Fraction),
+            ("shift", a.shift, NonNegative),
+        ] {
+            if !bound.holds(v) {
+                return Err(src.invalid(&flat.key(key), bound.what(v)));
+            }
+        }
+        if !(a.square.is_finite() && (0.0..90.0).contains(&a.square)) {
+            return Err(src.invalid(
+                &flat.key("square"),
+                format!("must be 0 to 90 degrees (less than 90), not {}", a.square),
+            ));
+        }
+        if !(a.turn.is_finite() && a.turn >= 1.0 && a.turn <= 90.0) {
+            return Err(src.invalid(
+                &flat.key("turn"),
+                format!("must be 1 to 90 degrees, not {}", a.turn),
+            ));
+        }
+    }
     if let Some(k) = f.yaw_offsets.iter().position(|y| !y.is_finite()) {
         return Err(src.invalid(&fit.key("yaw_offsets").at(k), "must be finite"));
     }
@@ -1978,6 +2040,22 @@ mod tests {
         );
     }
 
+    /// Each of `edits` (`from`, `to`, key, what the error says) made to the inline table
+    /// `rule` of `[hypothesis]` in `text` is named by its line and `hypothesis.<table>.<key>`.
+    fn each_edit_named(text: &str, rule: &str, table: &str, edits: &[(&str, &str, &str, &str)]) {
+        for (from, to, key, what) in edits {
+            let to = rule.replace(from, to);
+            let bad = text.replace(rule, &to);
+            let line = line_of(&bad, &to, 0);
+            names(
+                &error(&bad),
+                line,
+                &format!("hypothesis.{table}.{key}"),
+                what,
+            );
+        }
+    }
+
     #[test]
     fn a_bad_surface_rule_is_named() {
         let rule =
@@ -1985,42 +2063,65 @@ mod tests {
         let lying = crate::model::set::BUILTIN_LYING;
         assert_eq!(lying.matches(rule).count(), 1);
         assert!(load(lying).unwrap().hypothesis.surface.is_some());
-        for (to, key, what) in [
-            (
-                rule.replace("elongation = 1.3", "elongation = 0.5"),
-                "elongation",
-                "at least 1",
-            ),
-            (
-                rule.replace("min_width = 0.40", "min_width = 0.0"),
-                "min_width",
-                "positive",
-            ),
-            (
-                rule.replace("radius = 0.5", "radius = 3.0"),
-                "radius",
-                "outside",
-            ),
-            (
-                rule.replace("rise = 0.10", "rise = -0.1"),
-                "rise",
-                "not be negative",
-            ),
-            (
-                rule.replace("face = 0.20", "face = 0.0"),
-                "face",
-                "positive",
-            ),
-        ] {
-            let bad = lying.replace(rule, &to);
-            let line = line_of(&bad, &to, 0);
-            names(
-                &error(&bad),
-                line,
-                &format!("hypothesis.surface.{key}"),
-                what,
-            );
-        }
+        each_edit_named(
+            lying,
+            rule,
+            "surface",
+            &[
+                (
+                    "elongation = 1.3",
+                    "elongation = 0.5",
+                    "elongation",
+                    "at least 1",
+                ),
+                (
+                    "min_width = 0.40",
+                    "min_width = 0.0",
+                    "min_width",
+                    "positive",
+                ),
+                ("radius = 0.5", "radius = 3.0", "radius", "outside"),
+                ("rise = 0.10", "rise = -0.1", "rise", "not be negative"),
+                ("face = 0.20", "face = 0.0", "face", "positive"),
+            ],
+        );
+    }
+
+    #[test]
+    fn a_bad_flat_rule_is_named_and_needs_the_surface_rule() {
+        let rule =
+            "flat = { length = 0.6, middle = 0.05, square = 15.0, off = 0.05, shift = 0.25, turn = 15.0 }";
+        // Off in the built-in lying hierarchy: its line there, commented out, switched on.
+        let builtin = crate::model::set::BUILTIN_LYING;
+        assert!(load(builtin).unwrap().hypothesis.flat.is_none());
+        assert_eq!(builtin.matches(&format!("# {rule}")).count(), 1);
+        let lying = &builtin.replace(&format!("# {rule}"), rule);
+        assert!(load(lying).unwrap().hypothesis.flat.is_some());
+        each_edit_named(
+            lying,
+            rule,
+            "flat",
+            &[
+                ("length = 0.6", "length = 0.0", "length", "positive"),
+                (
+                    "middle = 0.05",
+                    "middle = -0.1",
+                    "middle",
+                    "not be negative",
+                ),
+                ("square = 15.0", "square = 90.0", "square", "0 to 90"),
+                ("off = 0.05", "off = 1.5", "off", "between 0 and 1"),
+                ("shift = 0.25", "shift = -0.1", "shift", "not be negative"),
+                ("turn = 15.0", "turn = 0.0", "turn", "1 to 90"),
+            ],
+        );
+        // Without the surface rule the rectangle has no width: named at `flat`.
+        let surface = lying.lines().find(|l| l.starts_with("surface = ")).unwrap();
+        let e = error(&lying.replace(surface, ""));
+        assert!(
+            e.contains("hypothesis.flat") && e.contains("surface"),
+            "{e}"
+        );
     }
 
     #[test]

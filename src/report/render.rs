@@ -838,6 +838,7 @@ mod tests {
             memberships: [1.0; 3],
             risen: false,
             unseen_width: false,
+            flat_axes: Vec::new(),
         }
     }
 
