@@ -1,10 +1,11 @@
 //! Fits and unfolds one hierarchy at a place and heading you give, and prints what each
 //! fit and node found, for looking at why a place gets no detection, or the one it gets:
-//! `cargo run --release --example probe_place -- CLOUD X Y [YAW_DEG] [sitting|lying|FILE.toml]`.
+//! `cargo run --release --example probe_place -- CLOUD X Y [YAW_DEG] [sitting|lying|FILE.toml] [BODY_M]`.
 //! The cloud must already be in the detector's frame (metres, z up, floor at z = 0). The
 //! hypothesis nearest to (X, Y) gives the height and the memberships; the place is moved to
 //! (X, Y) and, with YAW_DEG, its heading set; then section 4.2's fit (every heading it
-//! tries) and section 4.4's unfolding run as `afford detect` runs them, at 1.75 m.
+//! tries) and section 4.4's unfolding run as `afford detect` runs them, for a body BODY_M
+//! metres tall (default 1.75).
 use std::path::Path;
 
 use afford::detect::{prepare_guarded, DetectConfig};
@@ -17,12 +18,12 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let number = |i: usize| args.get(i).and_then(|s| s.parse::<f64>().ok());
     let (Some(path), Some(x), Some(y)) = (args.get(1), number(2), number(3)) else {
-        eprintln!("usage: probe_place CLOUD X Y [YAW_DEG] [sitting|lying|FILE.toml]");
+        eprintln!("usage: probe_place CLOUD X Y [YAW_DEG] [sitting|lying|FILE.toml] [BODY_M]");
         std::process::exit(2);
     };
     let yaw = number(4).map(f64::to_radians);
     let name = args.get(5).map_or("sitting", String::as_str);
-    let body = 1.75;
+    let body = number(6).unwrap_or(1.75);
     let fail = |what: String| -> ! {
         eprintln!("error: {what}");
         std::process::exit(2);
