@@ -732,8 +732,14 @@ pub fn open_across(
 /// the cell along it and shifted across by up to the rule's `shift` (whole cells), with at
 /// most the rule's `off` share of its samples (one per cell, on a grid turned with it)
 /// seen off `level` (metres): more than `tolerance` below it, or more than `rise` (the
-/// folds of a duvet) above it. Unseen cells, and cells outside the map, are no edge (a
-/// hole in the scan, a bed cut by the image edge).
+/// folds of a duvet) above it. Beyond the rule's `middle` (fraction of `body_height`)
+/// from the cell along the rectangle, at either end, a rise is not off but the surface
+/// going up (a reclined back, a raised leg rest), where it runs across the whole width
+/// (every column seen at that end rises there) and square to it (where it begins along
+/// the rectangle spreads over at most the rule's `square` degrees' worth of its width);
+/// else the rectangle is not flat (a back along its side, or one running into a corner).
+/// Unseen cells, and cells outside the map, are no edge (a hole in the scan, a bed cut by
+/// the image edge). The samples span `width` and the length to the nearest cell.
 pub fn flat_rectangles(
     map: &HeightMap,
     (ix, iy): (usize, usize),
@@ -984,7 +990,8 @@ mod tests {
         HeightMap::from_dense(0.0, 0.0, 0.05, n, n, &heights)
     }
 
-    /// The lying hierarchy's flat rectangle with the given `middle`, and its width (0.70 m).
+    /// The flat rectangle of `affordances/lying.toml` (commented out there), and its width
+    /// at 1.75 m (0.70 m).
     fn flat_rule() -> (FlatRule, f64) {
         let rule = FlatRule {
             length: 0.6,
@@ -1013,8 +1020,8 @@ mod tests {
     #[test]
     fn a_body_lies_on_a_flat_rectangle_along_a_bed_and_not_into_a_seats_corner() {
         let floor = Some(0.0);
-        // A bed 2 m x 0.9 m along x, its top at 0.45 m: flat along it (0 deg), and
-        // 15 deg either way, where 0.70 m still fits across; not across it.
+        // A bed 2 m x 0.9 m along x, its top at 0.45 m: flat along it (0 deg), not
+        // across it.
         let bed = flat_axes_of(|x, y| {
             Some(if x.abs() < 1.0 && y.abs() < 0.45 {
                 0.45

@@ -959,6 +959,34 @@ fn check_limits(file: &File, src: Source) -> Result<(), ModelError> {
             "fraction of H: beyond two bodies the surface measured is no longer the place's",
         ),
         (
+            hyp.key("surface").key("min_width"),
+            h.surface.map_or(0.4, |a| a.min_width),
+            0.0,
+            2.0,
+            "fraction of H: a surface wider than two bodies is asked of no place a body rests on",
+        ),
+        (
+            hyp.key("flat").key("length"),
+            h.flat.map_or(0.6, |a| a.length),
+            0.0,
+            2.0,
+            "fraction of H: a rectangle longer than two bodies is no longer the place's",
+        ),
+        (
+            hyp.key("flat").key("middle"),
+            h.flat.map_or(0.05, |a| a.middle),
+            0.0,
+            2.0,
+            "fraction of H: beyond two bodies nothing is the rectangle's middle",
+        ),
+        (
+            hyp.key("flat").key("shift"),
+            h.flat.map_or(0.25, |a| a.shift),
+            0.0,
+            2.0,
+            "metres: a rectangle shifted further than a body's length is no longer round the place",
+        ),
+        (
             hyp.key("perch").key("radius"),
             h.perch.map_or(0.3, |p| p.radius),
             0.0,
@@ -2112,6 +2140,7 @@ mod tests {
                 ("square = 15.0", "square = 90.0", "square", "0 to 90"),
                 ("off = 0.05", "off = 1.5", "off", "between 0 and 1"),
                 ("shift = 0.25", "shift = -0.1", "shift", "not be negative"),
+                ("length = 0.6", "length = 1e9", "length", "outside"),
                 ("turn = 15.0", "turn = 0.0", "turn", "1 to 90"),
             ],
         );
