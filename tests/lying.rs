@@ -518,17 +518,16 @@ fn a_tall_bed_is_lain_on_by_every_body_and_a_table_by_none() {
     check(&table, &[]);
 }
 
-/// The lying hierarchy with its `flat` rule set as `rule` (a line of `[hypothesis]`).
-fn lying_with_flat(height: f64, rule: &str) -> (Agent, Hierarchy) {
+/// The lying hierarchy with its `flat` rule switched on: the line that stands commented
+/// out in affordances/lying.toml.
+fn lying_with_flat(height: f64) -> (Agent, Hierarchy) {
     let agent = Agent::load(Path::new("agents/human.toml"), height).unwrap();
     let path = Path::new("affordances/lying.toml");
     let text = std::fs::read_to_string(path).unwrap();
-    let text = text.replacen(
-        "hidden_seats = false",
-        &format!("hidden_seats = false\n{rule}"),
-        1,
-    );
+    assert_eq!(text.matches("\n# flat = ").count(), 1);
+    let text = text.replacen("\n# flat = ", "\nflat = ", 1);
     let h = Hierarchy::from_toml(&text, path, &agent).unwrap();
+    assert!(h.hypothesis.flat.is_some());
     (agent, h)
 }
 
@@ -562,7 +561,6 @@ fn l_sofa() -> Mesh {
 
 #[test]
 fn a_flat_rectangle_keeps_bodies_off_an_l_sofas_corner_and_on_a_bed() {
-    let rule = "flat = { length = 0.6, middle = 0.05, square = 15.0, off = 0.05, shift = 0.25, turn = 15.0 }";
     let sofa = cloud(&l_sofa());
     let bed = cloud(
         &bed(&BedParams {
@@ -583,7 +581,7 @@ fn a_flat_rectangle_keeps_bodies_off_an_l_sofas_corner_and_on_a_bed() {
             o.stats
         );
         // With it, no flat rectangle 0.4 H wide lies there; on a bed one does.
-        let (agent, flat) = lying_with_flat(height, rule);
+        let (agent, flat) = lying_with_flat(height);
         let o = detect(&sofa, &agent, &flat, &DetectConfig::default());
         assert_eq!(
             affords(&o),

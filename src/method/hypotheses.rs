@@ -76,6 +76,12 @@ fn hypotheses_in_pieces(
         let rise = sr.rise.unwrap_or(sr.tolerance);
         (sr, rise, map.disc(sr.radius * body_height))
     });
+    // The flat rectangle's samples, the same at every place.
+    let flat_grid = rule_
+        .flat
+        .as_ref()
+        .zip(rule_.surface.as_ref())
+        .map(|(f, sr)| FlatGrid::new(f, sr.min_width * body_height, body_height, map.cell));
     // The membership in fractions of H, or in metres as it is.
     let height = rule_
         .height
@@ -177,15 +183,8 @@ fn hypotheses_in_pieces(
             };
             // A flat rectangle along the body: the orientations it lies along, or none.
             let mut flat_axes = Vec::new();
-            if let (Some(flat), Some((sr, rise, _))) = (&rule_.flat, &shape) {
-                flat_axes = flat_rectangles(
-                    map,
-                    (ix, iy),
-                    (mean, sr.tolerance, *rise),
-                    sr.min_width * body_height,
-                    flat,
-                    body_height,
-                );
+            if let (Some(grid), Some((sr, rise, _))) = (&flat_grid, &shape) {
+                flat_axes = flat_rectangles(map, (ix, iy), (mean, sr.tolerance, *rise), grid);
                 if flat_axes.is_empty() {
                     continue;
                 }
@@ -726,58 +725,110 @@ pub fn open_across(
     })
 }
 
-/// The orientations (radians about z, the rule's `turn` apart in `[0, pi)`) along which a
-/// flat rectangle lies round cell `(ix, iy)` of `map` ([`FlatRule`]): `width` metres
-/// across and the rule's `length` (fraction of `body_height`, metres) along, centred on
-/// the cell along it and shifted across by up to the rule's `shift` (whole cells), with at
-/// most the rule's `off` share of its samples (one per cell, on a grid turned with it)
-/// seen off `level` (metres): more than `tolerance` below it, or more than `rise` (the
-/// folds of a duvet) above it. Beyond the rule's `middle` (fraction of `body_height`)
-/// from the cell along the rectangle, at either end, a rise is not off but the surface
-/// going up (a reclined back, a raised leg rest), where it runs across the whole width
-/// (every column seen at that end rises there) and square to it (where it begins along
-/// the rectangle spreads over at most the rule's `square` degrees' worth of its width);
-/// else the rectangle is not flat (a back along its side, or one running into a corner).
-/// Unseen cells, and cells outside the map, are no edge (a hole in the scan, a bed cut by
-/// the image edge). The samples span `width` and the length to the nearest cell.
+/// The samples of [`flat_rectangles`] for one rule, width and body: the rectangle's sizes
+/// in cells and, per orientation, the cell offset of each sample, the same at every place
+/// (so turned and rounded once per map, not once per place).
+#[derive(Debug, Clone)]
+pub struct FlatGrid {
+    /// The orientations, radians about z, the rule's `turn` apart in `[0, pi)`.
+    thetas: Vec<f64>,
+    /// Samples either side of the centre along the rectangle and across it, and the
+    /// furthest shift across, in cells.
+    half_along: isize,
+    half_across: isize,
+    shifts: isize,
+    /// The middle's half length along the rectangle, cells.
+    middle: isize,
+    /// Most samples off the level.
+    most_off: isize,
+    /// Largest spread along the rectangle of where an end's rise begins, cells.
+    square: f64,
+    /// Per orientation, the offset `(dx, dy)` in cells of sample `(i, j)` (`i` along,
+    /// `j` across including the shifts), row `j` after row.
+    offsets: Vec<Vec<(isize, isize)>>,
+}
+
+impl FlatGrid {
+    /// The samples of `rule` for a rectangle `width` metres wide, for a body
+    /// `body_height` metres tall, on a map of `cell`-metre cells. The samples span
+    /// `width` and the length to the nearest cell.
+    pub fn new(rule: &FlatRule, width: f64, body_height: f64, cell: f64) -> FlatGrid {
+        let half_along = to_isize((rule.length * body_height / 2.0 / cell).round());
+        let half_across = to_isize((width / 2.0 / cell).round());
+        let shifts = to_isize((rule.shift / cell).floor());
+        let samples = (2 * half_along + 1) * (2 * half_across + 1);
+        let turns = to_isize((180.0 / rule.turn).round()).max(1);
+        let thetas: Vec<f64> = (0..turns)
+            .map(|k| (k as f64 * rule.turn).to_radians())
+            .collect();
+        let reach = half_across + shifts;
+        let offsets = thetas
+            .iter()
+            .map(|theta| {
+                let (ax, ay) = (theta.cos(), theta.sin());
+                (-reach..=reach)
+                    .flat_map(|j| {
+                        (-half_along..=half_along).map(move |i| {
+                            let (fx, fy) =
+                                (i as f64 * ax - j as f64 * ay, i as f64 * ay + j as f64 * ax);
+                            (to_isize(fx.round()), to_isize(fy.round()))
+                        })
+                    })
+                    .collect()
+            })
+            .collect();
+        FlatGrid {
+            thetas,
+            half_along,
+            half_across,
+            shifts,
+            middle: to_isize((rule.middle * body_height / cell).floor()),
+            most_off: to_isize((rule.off * samples as f64).floor()),
+            square: width * rule.square.to_radians().tan() / cell,
+            offsets,
+        }
+    }
+}
+
+/// The orientations (radians about z) of `grid` along which a flat rectangle lies round
+/// cell `(ix, iy)` of `map` ([`FlatRule`], [`FlatGrid`]): centred on the cell along it and
+/// shifted across by up to the rule's `shift`, with at most the rule's `off` share of its
+/// samples (one per cell, on a grid turned with it) seen off `level` (metres): more than
+/// `tolerance` below it, or more than `rise` (the folds of a duvet) above it. Beyond the
+/// rule's `middle` from the cell along the rectangle, at either end, a rise is not off but
+/// the surface going up (a reclined back, a raised leg rest), where it runs across the
+/// whole width (every column seen at that end rises there) and square to it (where it
+/// begins along the rectangle spreads over at most the rule's `square` degrees' worth of
+/// its width); else the rectangle is not flat (a back along its side, or one running into
+/// a corner). Unseen cells, and cells outside the map, are no edge (a hole in the scan, a
+/// bed cut by the image edge).
 pub fn flat_rectangles(
     map: &HeightMap,
     (ix, iy): (usize, usize),
     (level, tolerance, rise): (f64, f64, f64),
-    width: f64,
-    rule: &FlatRule,
-    body_height: f64,
+    grid: &FlatGrid,
 ) -> Vec<f64> {
-    let cell = map.cell;
-    let half_along = to_isize((rule.length * body_height / 2.0 / cell).round());
-    let half_across = to_isize((width / 2.0 / cell).round());
-    let shifts = to_isize((rule.shift / cell).floor());
-    let samples = (2 * half_along + 1) * (2 * half_across + 1);
-    let most_off = to_isize((rule.off * samples as f64).floor());
     let rises = rise.max(tolerance);
-    let middle = to_isize((rule.middle * body_height / cell).floor());
-    let square = width * rule.square.to_radians().tan() / cell;
-    let turns = to_isize((180.0 / rule.turn).round()).max(1);
-    (0..turns)
-        .map(|k| (k as f64 * rule.turn).to_radians())
-        .filter(|theta| {
-            let (ax, ay) = (theta.cos(), theta.sin());
-            (-shifts..=shifts).any(|s| {
+    let (half_along, half_across, middle) = (grid.half_along, grid.half_across, grid.middle);
+    let columns = 2 * half_along + 1;
+    let reach = half_across + grid.shifts;
+    grid.thetas
+        .iter()
+        .zip(&grid.offsets)
+        .filter(|(_, offsets)| {
+            (-grid.shifts..=grid.shifts).any(|s| {
                 let mut off = 0;
                 // Per end (towards -i, towards +i): the nearest rise's |i| beyond the
                 // middle over the columns that have one (least, most), and how many
                 // columns are seen there without one.
                 let mut ends = [(isize::MAX, isize::MIN, 0usize); 2];
                 for j in -half_across + s..=half_across + s {
+                    let row = (j + reach) * columns;
                     let mut first = [None::<isize>; 2];
                     let mut seen_end = [false; 2];
                     for i in -half_along..=half_along {
-                        let (fx, fy) =
-                            (i as f64 * ax - j as f64 * ay, i as f64 * ay + j as f64 * ax);
-                        let Some(h) = map.get(
-                            ix as isize + to_isize(fx.round()),
-                            iy as isize + to_isize(fy.round()),
-                        ) else {
+                        let (dx, dy) = offsets[(row + i + half_along).unsigned_abs()];
+                        let Some(h) = map.get(ix as isize + dx, iy as isize + dy) else {
                             continue;
                         };
                         let d = h - level;
@@ -791,7 +842,7 @@ pub fn flat_rectangles(
                             }
                             _ if d < -tolerance || d > rises => {
                                 off += 1;
-                                if off > most_off {
+                                if off > grid.most_off {
                                     return false;
                                 }
                             }
@@ -808,15 +859,12 @@ pub fn flat_rectangles(
                 }
                 // A rise at an end runs square across the whole width (a reclined back,
                 // a raised leg rest), not along a side or into a corner.
-                if ends
+                !ends
                     .iter()
-                    .any(|&(lo, hi, open)| hi >= lo && (open > 0 || (hi - lo) as f64 > square))
-                {
-                    return false;
-                }
-                true
+                    .any(|&(lo, hi, open)| hi >= lo && (open > 0 || (hi - lo) as f64 > grid.square))
             })
         })
+        .map(|(&theta, _)| theta)
         .collect()
 }
 
@@ -1011,7 +1059,8 @@ mod tests {
             f(ix as f64 * 0.05 - 1.5, iy as f64 * 0.05 - 1.5)
         });
         let (rule, width) = flat_rule();
-        flat_rectangles(&m, (30, 30), (0.45, 0.05, 0.10), width, &rule, 1.75)
+        let grid = FlatGrid::new(&rule, width, 1.75, 0.05);
+        flat_rectangles(&m, (30, 30), (0.45, 0.05, 0.10), &grid)
             .into_iter()
             .map(|a| to_isize(a.to_degrees().round()))
             .collect()
