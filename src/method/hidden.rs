@@ -168,35 +168,52 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
         // A seat's side edges joined to the walls widen the place they hold; where they
         // show a seat no wider across than one, the floor under it counts as unseen.
         let edges = seat_edges(map, &comp, cfg, deepest, &mut scratch);
+        let seat_seen = edges.is_none();
+        let edges = edges.unwrap_or_default();
         let mut shape = comp.clone();
         shape.extend_from_slice(&edges);
         let outline = Bounds::of(&shape);
-        let Some(hull) = Hull::of(&shape) else {
+        let heights = sorted_heights(map, &comp);
+        let quantile = |q: f64| heights[to_usize((q * (heights.len() - 1) as f64).round())];
+        let mut level = quantile(cfg.level_quantile) - cfg.drop;
+        // With no seat's edge seen, walls that are a back and an arm running forward
+        // from it (the other arm hidden) show the seat between them: an L's hull is
+        // completed to the parallelogram of its legs, and the floor seen there counts as
+        // seen under the seat, as where a seat's edge shows it. A ring or a corner of
+        // one height (a bin, a bath, two low walls) has no back rising over an arm;
+        // beside a seat the scan saw, the walls hide no other.
+        let arm = !seat_seen
+            && edges.is_empty()
+            && back_and_arm(map, &comp, level + cfg.back_rise, radius);
+        let hull = Hull::of(&shape);
+        let hull = match hull {
+            Some(h) if arm => h.completed(&comp, deepest + 1).or(Some(h)),
+            h => h,
+        };
+        let (Some(hull), Some(reach)) = (&hull, hull.as_ref().and_then(|h| h.bounds(map))) else {
             continue;
         };
         let across = (outline.x1 - outline.x0 + 1).min(outline.y1 - outline.y0 + 1);
-        let floor_top = (!edges.is_empty() && across as f64 * map.cell <= cfg.max_span + 1e-9)
+        let floor_top = ((!edges.is_empty() || arm)
+            && across as f64 * map.cell <= cfg.max_span + 1e-9)
             .then_some(cfg.floor_top);
         let strict = Open {
             floor_top,
             edges: None,
         };
-        let mut centres = hidden_centres(map, &outline, &hull, radius, strict);
+        let mut centres = hidden_centres(map, &reach, hull, radius, strict);
         if centres.is_empty() && floor_top.is_none() {
             continue;
         }
-        let heights = sorted_heights(map, &comp);
-        let quantile = |q: f64| heights[to_usize((q * (heights.len() - 1) as f64).round())];
         let mut open = strict;
-        let mut level = quantile(cfg.level_quantile) - cfg.drop;
         // No such place, but the seat seen in part beside one: the places may hold the
         // seat's edges too (not at their centre), and the seat is at the edges' height.
-        if centres.is_empty() && floor_top.is_some() {
+        if centres.is_empty() && floor_top.is_some() && !edges.is_empty() {
             let seat = sorted_heights(map, &edges);
             let seat = seat[seat.len() / 2];
             if quantile(1.0 - cfg.level_quantile) - seat >= cfg.back_rise - 1e-9 {
                 open.edges = Some((cfg.edge_low, cfg.wall_low));
-                centres = hidden_centres(map, &outline, &hull, radius, open);
+                centres = hidden_centres(map, &reach, hull, radius, open);
                 level = seat;
             }
         }
@@ -344,7 +361,7 @@ fn height(map: &HeightMap, (x, y): (usize, usize)) -> Option<f64> {
 /// The cells of `map` between `cfg.edge_low` and `cfg.wall_low` joined to the wall
 /// component `comp` through sides and corners (seat edges, and what joins them at their
 /// height), if they are no thicker than `deepest` cells from their edge (see
-/// [`half_width`]); none where they are thicker (a seat the scan saw, a low table).
+/// [`half_width`]); `None` where they are thicker (a seat the scan saw, a low table).
 /// `marks` is scratch space, all clear on entry and on return.
 fn seat_edges(
     map: &HeightMap,
@@ -352,7 +369,7 @@ fn seat_edges(
     cfg: &HiddenConfig,
     deepest: usize,
     marks: &mut Bits,
-) -> Vec<(usize, usize)> {
+) -> Option<Vec<(usize, usize)>> {
     let is_edge = |h: f64| (cfg.edge_low..cfg.wall_low).contains(&h);
     let mut edges = Vec::new();
     for &c in comp {
@@ -365,10 +382,29 @@ fn seat_edges(
     for &e in &edges {
         marks.set(e, false);
     }
-    if edges.is_empty() || half_width(&edges, &Bounds::of(&edges)) > deepest {
-        return Vec::new();
+    if !edges.is_empty() && half_width(&edges, &Bounds::of(&edges)) > deepest {
+        return None;
     }
-    edges
+    Some(edges)
+}
+
+/// Whether the wall component `comp` is a back and an arm: some of its cells rise to
+/// `back` metres or more (the back), and some lower cell (the arm) lies at least twice
+/// `radius` cells (a place's width, a seat's least depth) from every one of them: an arm
+/// running forward from the back, not a rail along it.
+fn back_and_arm(map: &HeightMap, comp: &[(usize, usize)], back: f64, radius: usize) -> bool {
+    let (high, low): (Vec<_>, Vec<_>) = comp
+        .iter()
+        .map(|&c| (c, height(map, c).unwrap_or(f64::NEG_INFINITY)))
+        .partition(|&(_, h)| h >= back - 1e-9);
+    let reach = (2 * radius * 2 * radius) as i64;
+    let apart = |(a, b): (usize, usize), (c, d): (usize, usize)| {
+        (a as i64 - c as i64).pow(2) + (b as i64 - d as i64).pow(2)
+    };
+    !high.is_empty()
+        && low
+            .iter()
+            .any(|&(l, _)| high.iter().all(|&(h, _)| apart(l, h) >= reach))
 }
 
 /// The wall cells joined to `start` through sides and corners, marked in `walls`.
@@ -464,7 +500,11 @@ fn cross(o: (i64, i64), a: (i64, i64), b: (i64, i64)) -> i64 {
 impl Hull {
     /// The hull of `cells` (Andrew's monotone chain), or `None` when they lie on a line.
     fn of(cells: &[(usize, usize)]) -> Option<Hull> {
-        let mut pts: Vec<(i64, i64)> = cells.iter().map(|&(x, y)| (x as i64, y as i64)).collect();
+        Hull::of_points(cells.iter().map(|&(x, y)| (x as i64, y as i64)).collect())
+    }
+
+    /// The hull of `pts` (Andrew's monotone chain), or `None` when they lie on a line.
+    fn of_points(mut pts: Vec<(i64, i64)>) -> Option<Hull> {
         pts.sort_unstable();
         pts.dedup();
         // The lower chain left to right and the upper chain right to left, each with its
@@ -483,6 +523,66 @@ impl Hull {
         let mut hull = chain(&mut pts.iter().copied());
         hull.extend(chain(&mut pts.iter().rev().copied()));
         (hull.len() >= 3).then_some(Hull(hull))
+    }
+
+    /// This hull, of the wall cells `cells` (with a seat's edges, if any; walls at most
+    /// `thick` cells from their middle line), completed to the parallelogram of an L: with every vertex also mirrored through the middle
+    /// of the hull's widest chord (its two farthest vertices, the ends of an L's legs),
+    /// so that an L's corner finds its opposite. `None` unless every cell lies along the
+    /// two legs from the corner (the vertex farthest from the chord) to the chord's ends:
+    /// a U, a ring or a blob (a plant's leaves) is no L.
+    fn completed(&self, cells: &[(usize, usize)], thick: usize) -> Option<Hull> {
+        let v = &self.0;
+        let mut ends = (v[0], v[0]);
+        let mut widest = -1;
+        for (i, &a) in v.iter().enumerate() {
+            for &b in &v[i + 1..] {
+                let d = (a.0 - b.0).pow(2) + (a.1 - b.1).pow(2);
+                if d > widest {
+                    (widest, ends) = (d, (a, b));
+                }
+            }
+        }
+        let (a, b) = ends;
+        // The corner: the vertex farthest from the chord; every cell within `thick` of
+        // one of the two legs from it to the chord's ends.
+        let corner = *v.iter().max_by_key(|&&p| cross(a, b, p).abs())?;
+        let near = |p: (i64, i64), q: (i64, i64), c: (i64, i64)| {
+            let (dx, dy) = ((q.0 - p.0) as f64, (q.1 - p.1) as f64);
+            let (ex, ey) = ((c.0 - p.0) as f64, (c.1 - p.1) as f64);
+            let t = ((ex * dx + ey * dy) / (dx * dx + dy * dy).max(1.0)).clamp(0.0, 1.0);
+            (ex - t * dx).hypot(ey - t * dy) <= thick as f64 + 1e-9
+        };
+        let on_legs = cells.iter().all(|&(x, y)| {
+            let c = (x as i64, y as i64);
+            near(corner, a, c) || near(corner, b, c)
+        });
+        if !on_legs {
+            return None;
+        }
+        let mut pts: Vec<(i64, i64)> = v.clone();
+        pts.extend(v.iter().map(|&p| (a.0 + b.0 - p.0, a.1 + b.1 - p.1)));
+        Hull::of_points(pts)
+    }
+
+    /// The box of the cells of `map` whose centres may lie inside, or `None` if it holds
+    /// none of them.
+    fn bounds(&self, map: &HeightMap) -> Option<Bounds> {
+        let (mut x0, mut x1, mut y0, mut y1) = (i64::MAX, i64::MIN, i64::MAX, i64::MIN);
+        for &(x, y) in &self.0 {
+            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+        }
+        let clamp = |v: i64, n: usize| usize::try_from(v.clamp(0, n as i64 - 1)).ok();
+        let (nx, ny) = (map.nx, map.ny);
+        if nx == 0 || ny == 0 || x1 < 0 || y1 < 0 || x0 >= nx as i64 || y0 >= ny as i64 {
+            return None;
+        }
+        Some(Bounds {
+            x0: clamp(x0, nx)?,
+            x1: clamp(x1, nx)?,
+            y0: clamp(y0, ny)?,
+            y1: clamp(y1, ny)?,
+        })
     }
 
     /// Whether the centre of cell `(x, y)` lies strictly inside.
@@ -685,6 +785,46 @@ mod tests {
             ..cfg
         };
         assert!(!hidden_seats(&map, &[], &low_rise).is_empty());
+    }
+
+    #[test]
+    fn a_back_and_one_arm_hold_the_seat_between_them_over_the_floor_seen_under_it() {
+        // An armchair with solid arm panels seen from its side: its back (0.88 m) along x
+        // 19-20, its near arm (0.62 m) running 0.45 m forward from it along y 10-11, the
+        // seat hidden behind the arm and the floor seen under it; the far arm unseen.
+        let chair = [(19, 20, 10, 19, 0.88), (10, 18, 10, 11, 0.62)];
+        let cfg = HiddenConfig::default();
+        let map = floor_map_with(&chair);
+        let holes = hidden_seats(&map, &[], &cfg);
+        assert_eq!(holes.len(), 1);
+        // Under the arm, as for an armchair seen from behind.
+        assert!((holes[0].height - 0.47).abs() < 1e-9);
+        // The far corner of the seat, (11, 17), is 0.15 m or less from no cell inside
+        // the L's own hull (a triangle), only from cells of its parallelogram.
+        assert!(holes[0].cells.contains(&(11, 17)));
+        // The walls are left as they are: the fill is over the floor beside them.
+        assert!(holes[0]
+            .cells
+            .iter()
+            .all(|&c| height(&map, c).is_some_and(|h| h < cfg.floor_top)));
+        // A corner of one height (two low walls, a bin's side) has no back over an arm;
+        // an arm shorter than a seat is deep is a rail along the back; walls spanning
+        // more than a seat are a room's: nothing is filled over the floor.
+        // Beside a seat the scan saw (0.42 m, joined to the arm's front end and wider
+        // than a seat's edge: a sofa's next seat), the walls hide no other.
+        let beside_seen = [chair[0], chair[1], (0, 9, 8, 19, 0.42)];
+        assert!(hidden_seats(&floor_map_with(&beside_seen), &[], &cfg).is_empty());
+        let corner = [(19, 20, 10, 19, 0.62), (10, 18, 10, 11, 0.62)];
+        assert!(hidden_seats(&floor_map_with(&corner), &[], &cfg).is_empty());
+        let rail = [(19, 20, 10, 19, 0.88), (15, 18, 10, 11, 0.62)];
+        assert!(hidden_seats(&floor_map_with(&rail), &[], &cfg).is_empty());
+        let room = [(27, 28, 2, 27, 0.88), (2, 26, 2, 3, 0.62)];
+        assert!(hidden_seats(&floor_map_with(&room), &[], &cfg).is_empty());
+        let wide = HiddenConfig {
+            max_span: 1.5,
+            ..cfg
+        };
+        assert!(!hidden_seats(&floor_map_with(&room), &[], &wide).is_empty());
     }
 
     #[test]
