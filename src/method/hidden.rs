@@ -184,7 +184,7 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
         // beside a seat the scan saw, the walls hide no other.
         let arm = !seat_seen
             && edges.is_empty()
-            && back_and_arm(map, &comp, level + cfg.back_rise, radius);
+            && back_and_arm(map, &comp, level + cfg.back_rise, radius, &mut scratch);
         let hull = Hull::of(&shape);
         let hull = match hull {
             Some(h) if arm => h.completed(&comp, deepest + 1).or(Some(h)),
@@ -391,20 +391,41 @@ fn seat_edges(
 /// Whether the wall component `comp` is a back and an arm: some of its cells rise to
 /// `back` metres or more (the back), and some lower cell (the arm) lies at least twice
 /// `radius` cells (a place's width, a seat's least depth) from every one of them: an arm
-/// running forward from the back, not a rail along it.
-fn back_and_arm(map: &HeightMap, comp: &[(usize, usize)], back: f64, radius: usize) -> bool {
-    let (high, low): (Vec<_>, Vec<_>) = comp
+/// running forward from the back, not a rail along it. Each lower cell looks only at the
+/// disc of that radius round it (work in proportion to the component's size); `marks` is
+/// scratch space, all clear on entry and on return.
+fn back_and_arm(
+    map: &HeightMap,
+    comp: &[(usize, usize)],
+    back: f64,
+    radius: usize,
+    marks: &mut Bits,
+) -> bool {
+    let high: Vec<(usize, usize)> = comp
         .iter()
-        .map(|&c| (c, height(map, c).unwrap_or(f64::NEG_INFINITY)))
-        .partition(|&(_, h)| h >= back - 1e-9);
-    let reach = (2 * radius * 2 * radius) as i64;
-    let apart = |(a, b): (usize, usize), (c, d): (usize, usize)| {
-        (a as i64 - c as i64).pow(2) + (b as i64 - d as i64).pow(2)
+        .copied()
+        .filter(|&c| height(map, c).is_some_and(|h| h >= back - 1e-9))
+        .collect();
+    if high.is_empty() {
+        return false;
+    }
+    for &c in &high {
+        marks.set(c, true);
+    }
+    let reach = 2 * radius as isize;
+    let near_back = |c: (usize, usize)| {
+        (-reach..=reach).any(|dy| {
+            (-reach..=reach).any(|dx| {
+                dx * dx + dy * dy < reach * reach
+                    && beside(map, c, (dx, dy)).is_some_and(|n| marks.get(n))
+            })
+        })
     };
-    !high.is_empty()
-        && low
-            .iter()
-            .any(|&(l, _)| high.iter().all(|&(h, _)| apart(l, h) >= reach))
+    let arm = comp.iter().any(|&c| !marks.get(c) && !near_back(c));
+    for &c in &high {
+        marks.set(c, false);
+    }
+    arm
 }
 
 /// The wall cells joined to `start` through sides and corners, marked in `walls`.
