@@ -387,6 +387,33 @@ impl NodeContext<'_> {
         })
     }
 
+    /// `behind`: whether the seat the body sits on ends behind it: from the root joint
+    /// against the body's heading, within the rule's `reach` (fraction of H), some
+    /// column holds something between the rule's `rise` and `top` above the root joint
+    /// (a back, a wall), or the surface ends as `rear`'s walk finds
+    /// ([`Scene::seat_ends`]). It depends on the place only, not on what was touched.
+    /// True when the node has no `behind` rule.
+    pub fn behind(&self) -> bool {
+        let Some(rule) = self.node.behind else {
+            return true;
+        };
+        let from = self.place.position;
+        let back = Vector3::new(-self.place.yaw.cos(), -self.place.yaw.sin(), 0.0);
+        let reach = rule.reach * self.agent.height;
+        let step = self.scene.voxel_size();
+        // Looking down from `top` above each probe: something within `top - rise` of it.
+        let band = rule.top - rule.rise;
+        let risen = (1..)
+            .map(|k| f64::from(k) * step)
+            .take_while(|&s| s <= reach)
+            .any(|s| {
+                let q = from + back * s;
+                let high = Point3::new(q.x, q.y, q.z + rule.top);
+                self.scene.drop_below(&high, band) <= band
+            });
+        risen || self.scene.seat_ends(&from, &back, reach, rule.gap)
+    }
+
     /// `beyond`: whether every part of `parts` that touches the scene touches something at
     /// the edge of the surface the body sits on: from the part's axis point nearest to the
     /// scene ([`Scene::contact`]), raised by its radius (level with its top), walking away
@@ -701,6 +728,7 @@ impl NodeContext<'_> {
         // (`beyond`, the dearest, last).
         let judged = node.release.is_some()
             || node.rear.is_some()
+            || node.behind.is_some()
             || node.beyond.is_some()
             || node.narrow.is_some()
             || node.beside.is_some();
@@ -709,6 +737,7 @@ impl NodeContext<'_> {
             motion(t, &mut parts);
             if !(self.release(&parts)
                 && self.rear(&parts)
+                && self.behind()
                 && self.narrow(&parts)
                 && self.beside(&p, &parts)
                 && self.beyond(&parts))
@@ -1411,6 +1440,68 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         assert!(with(&a, &h, &bed, &p, &node).rear(&[away]));
         node.rear = None;
         assert!(with(&a, &h, &bed, &p, &node).rear(&[trunk]));
+    }
+
+    #[test]
+    fn behind_accepts_a_seat_with_its_back_or_rear_edge_and_refuses_a_beds_edge() {
+        use crate::model::hierarchy::Behind;
+        let (a, h) = models();
+        // A top at 0.45 m from x = `from` to 0.45 (its front edge), 0.6 m wide, points 1 cm
+        // apart, with `more` points added; the body sits facing +x, its pelvis joint at x =
+        // 0.15, 8 cm over the top.
+        let scene = |from: i32, more: &dyn Fn(&mut Vec<Point3<f64>>)| {
+            let mut pts = Vec::new();
+            for i in from..=45 {
+                for j in -30..=30 {
+                    pts.push(Point3::new(f64::from(i) * 0.01, f64::from(j) * 0.01, 0.45));
+                }
+            }
+            more(&mut pts);
+            Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene)
+        };
+        // Points 1 cm apart over x in `xs` (cm), all y of the top, z in `zs` (cm).
+        let block = |xs: std::ops::RangeInclusive<i32>, zs: std::ops::RangeInclusive<i32>| {
+            move |pts: &mut Vec<Point3<f64>>| {
+                for i in xs.clone() {
+                    for j in -30..=30 {
+                        for k in zs.clone() {
+                            let (x, y) = (f64::from(i) * 0.01, f64::from(j) * 0.01);
+                            pts.push(Point3::new(x, y, f64::from(k) * 0.01));
+                        }
+                    }
+                }
+            }
+        };
+        let p = seated(0.15);
+        let mut node = h.nodes[0].clone();
+        // The stick is 1 m tall: the seat may go on 0.35 m behind the pelvis.
+        node.behind = Some(Behind {
+            reach: 0.35,
+            gap: 0.2,
+            rise: 0.15,
+            top: 0.6,
+        });
+        let behind = |s: &Scene, node: &Node| with(&a, &h, s, &p, node).behind();
+        // A seat with its back 0.15 m behind the pelvis (a sofa, an armchair).
+        let sofa = scene(0, &block(-5..=-1, 45..=100));
+        assert!(behind(&sofa, &node));
+        // A bench 0.45 m deep, the floor seen behind it: its rear edge.
+        let bench = scene(0, &block(-60..=-5, 0..=0));
+        assert!(behind(&bench, &node));
+        // A bed 2 m wide: the mattress goes on behind the body, also past a pillow lying
+        // flat on it (its top 2 cm over the pelvis joint) and under a shelf 0.8 m over it.
+        let bed = scene(-160, &|_| {});
+        assert!(!behind(&bed, &node));
+        let pillow = scene(-160, &block(-30..=-10, 46..=55));
+        assert!(!behind(&pillow, &node));
+        let shelf = scene(-160, &block(-50..=0, 133..=135));
+        assert!(!behind(&shelf, &node));
+        // A wall 0.30 m behind the pelvis ends it (a sofa's back against a wall).
+        let wall = scene(-160, &block(-15..=-14, 0..=120));
+        assert!(behind(&wall, &node));
+        // Without the rule, nothing is refused.
+        node.behind = None;
+        assert!(behind(&bed, &node));
     }
 
     #[test]

@@ -349,6 +349,9 @@ pub struct Node {
     /// What the node finds stands at the rear of a seat, not at the head of a bed (`None`:
     /// no such test).
     pub rear: Option<Rear>,
+    /// What the node finds is a rest of a seat, not of a bed's edge: the seat ends behind
+    /// the body (`None`: no such test).
+    pub behind: Option<Behind>,
     /// What the node finds stands at the edge of the surface the body sits on, not on it
     /// (`None`: no such test).
     pub beyond: Option<Beyond>,
@@ -394,6 +397,28 @@ pub struct Rear {
     /// Radians either side of the contact's normal along which the seat must end too: a
     /// seat ends in front of its back across the thighs' width, not along one line.
     pub fan: f64,
+}
+
+/// A node's `behind` rule: a contact counts only if the seat the body sits on ends behind
+/// it: walking from the root joint against the body's heading, within `reach` something
+/// rises over the walk, between `rise` and `top` metres above the root joint (a back, a
+/// wall behind a backless seat), or the surface ends ([`crate::method::scene::Scene::seat_ends`],
+/// over unseen space as for `rear`, within `gap` below). An armrest belongs to a seat with
+/// its back, or its rear edge, a seat's depth behind the sitter; a body on a bed's side
+/// edge has the mattress going on behind it for the bed's width, and a bed's end board
+/// beside it is no armrest (the conventions' bed rule; an extension).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Behind {
+    /// Fraction of the body height H: how far behind the root joint the seat may go on.
+    pub reach: f64,
+    /// Metres below the root joint within which the scene counts as the seat going on.
+    pub gap: f64,
+    /// Metres above the root joint from which something in a column counts as rising
+    /// over the seat (a duvet's lumps or a pillow lying flat stay below).
+    pub rise: f64,
+    /// Metres above the root joint up to which it is looked for (a shelf or an upper
+    /// bunk higher over the seat is not its end).
+    pub top: f64,
 }
 
 /// A node's `beyond` rule: a contact counts only if, walking on from where the part comes
@@ -617,6 +642,8 @@ struct NodeFile {
     #[serde(default)]
     rear: Option<RearFile>,
     #[serde(default)]
+    behind: Option<BehindFile>,
+    #[serde(default)]
     beyond: Option<BeyondFile>,
     #[serde(default)]
     narrow: Option<f64>,
@@ -639,6 +666,15 @@ struct BeyondFile {
     length: f64,
     #[serde(default)]
     rise: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BehindFile {
+    reach: f64,
+    gap: f64,
+    rise: f64,
+    top: f64,
 }
 
 #[derive(Deserialize)]
@@ -1356,7 +1392,7 @@ fn resolve_node(
             })
         }
     };
-    // The walks of `rear` and `beyond`: a reach in H and a gap below the pelvis under a
+    // The walks of `rear`, `behind` and `beyond`: a reach in H and a gap below the pelvis under a
     // metre (a metre below the pelvis is the floor under any seat).
     let walk = |name: &str, reach: f64, gap: f64| -> Result<(f64, f64), ModelError> {
         let key = key.key(name);
@@ -1380,6 +1416,27 @@ fn resolve_node(
                 reach,
                 gap,
                 fan: r.fan.to_radians(),
+            })
+        })
+        .transpose()?;
+    let behind = n
+        .behind
+        .as_ref()
+        .map(|r| {
+            let (reach, gap) = walk("behind", r.reach, r.gap)?;
+            let top = gap_under_a_metre(src, &key.key("behind").key("top"), r.top)?;
+            let rise = gap_under_a_metre(src, &key.key("behind").key("rise"), r.rise)?;
+            if rise >= top {
+                return Err(src.invalid(
+                    &key.key("behind").key("rise"),
+                    format!("must be under `top` ({top} m), not {rise}"),
+                ));
+            }
+            Ok::<_, ModelError>(Behind {
+                reach,
+                gap,
+                rise,
+                top,
             })
         })
         .transpose()?;
@@ -1642,6 +1699,7 @@ fn resolve_node(
         unseen_sweeps,
         beside,
         rear,
+        behind,
         beyond,
         narrow,
         slide,
@@ -2311,6 +2369,51 @@ mod tests {
         );
         let (e, line) = edited("facing_tolerance = 0.05", "facing_tolerance = -0.05");
         names(&e, line, "hypothesis.facing_tolerance", "-0.05");
+    }
+
+    #[test]
+    fn a_bad_behind_rule_is_named() {
+        let rule = "behind = { reach = 0.35, gap = 0.20, rise = 0.15, top = 0.60 }";
+        let sitting = load(BUILTIN_SITTING).unwrap();
+        let armrest = sitting.nodes.iter().find(|n| n.id == "armrest").unwrap();
+        assert_eq!(
+            armrest.behind.map(|b| (b.reach, b.gap, b.rise, b.top)),
+            Some((0.35, 0.20, 0.15, 0.60))
+        );
+        assert!(sitting
+            .nodes
+            .iter()
+            .all(|n| n.id == "armrest" || n.behind.is_none()));
+        for (bad, key, what) in [
+            (
+                "reach = 0.0, gap = 0.20, rise = 0.15, top = 0.60",
+                "reach",
+                "over 0",
+            ),
+            (
+                "reach = 0.35, gap = 1.5, rise = 0.15, top = 0.60",
+                "gap",
+                "under 1 metre",
+            ),
+            (
+                "reach = 0.35, gap = 0.20, rise = 0.15, top = 1.60",
+                "top",
+                "under 1 metre",
+            ),
+            (
+                "reach = 0.35, gap = 0.20, rise = 0.60, top = 0.60",
+                "rise",
+                "under `top`",
+            ),
+        ] {
+            let (e, line) = edited(rule, &format!("behind = {{ {bad} }}"));
+            names(&e, line, &format!("node.armrest.behind.{key}"), what);
+        }
+        let (e, line) = edited(rule, "behind = { reach = 0.35, gap = 0.20, rise = 0.15 }");
+        assert!(
+            e.contains("top") && e.starts_with(&format!("h.toml:{line}")),
+            "{e}"
+        );
     }
 
     #[test]
