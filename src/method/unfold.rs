@@ -1247,8 +1247,10 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         let (agent, mut h, backrest) = built_in_sitting();
         assert!(h.nodes[backrest].beyond.is_some());
         // The whole trunk checked, so that the rule alone decides (a pillow this high also
-        // touches the trunk above the span left out: see the next test).
+        // touches the trunk above the span left out: see the next test); the mattress
+        // going on behind the body (`behind`) is left out too.
         h.nodes[backrest].spans = vec![[0.0, 1.0]];
+        h.nodes[backrest].behind = None;
         let mut blind = h.clone();
         blind.nodes[backrest].beyond = None;
         let scene = |pts| Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene);

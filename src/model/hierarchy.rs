@@ -2373,17 +2373,20 @@ mod tests {
 
     #[test]
     fn a_bad_behind_rule_is_named() {
-        let rule = "behind = { reach = 0.35, gap = 0.20, rise = 0.15, top = 0.60 }";
         let sitting = load(BUILTIN_SITTING).unwrap();
-        let armrest = sitting.nodes.iter().find(|n| n.id == "armrest").unwrap();
-        assert_eq!(
-            armrest.behind.map(|b| (b.reach, b.gap, b.rise, b.top)),
-            Some((0.35, 0.20, 0.15, 0.60))
-        );
-        assert!(sitting
-            .nodes
-            .iter()
-            .all(|n| n.id == "armrest" || n.behind.is_none()));
+        for n in &sitting.nodes {
+            let rests = n.id == "armrest" || n.id == "backrest";
+            let want = rests.then_some((0.35, 0.20, 0.15, 0.60));
+            assert_eq!(
+                n.behind.map(|b| (b.reach, b.gap, b.rise, b.top)),
+                want,
+                "{}",
+                n.id
+            );
+        }
+        // The armrest's line, told from the backrest's by the comment line above it.
+        let at = "17 -> 10 of 120).\n";
+        let rule = format!("{at}behind = {{ reach = 0.35, gap = 0.20, rise = 0.15, top = 0.60 }}");
         for (bad, key, what) in [
             (
                 "reach = 0.0, gap = 0.20, rise = 0.15, top = 0.60",
@@ -2406,10 +2409,13 @@ mod tests {
                 "under `top`",
             ),
         ] {
-            let (e, line) = edited(rule, &format!("behind = {{ {bad} }}"));
+            let (e, line) = edited(&rule, &format!("{at}behind = {{ {bad} }}"));
             names(&e, line, &format!("node.armrest.behind.{key}"), what);
         }
-        let (e, line) = edited(rule, "behind = { reach = 0.35, gap = 0.20, rise = 0.15 }");
+        let (e, line) = edited(
+            &rule,
+            &format!("{at}behind = {{ reach = 0.35, gap = 0.20, rise = 0.15 }}"),
+        );
         assert!(
             e.contains("top") && e.starts_with(&format!("h.toml:{line}")),
             "{e}"
