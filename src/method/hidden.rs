@@ -35,6 +35,7 @@
 //! added over them to the cloud the scene is built from (not to the segmented points).
 //! This is not in the paper.
 
+use std::cell::OnceCell;
 use std::collections::HashMap;
 
 use nalgebra::Point3;
@@ -168,31 +169,35 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
         // A seat's side edges joined to the walls widen the place they hold; where they
         // show a seat no wider across than one, the floor under it counts as unseen.
         let edges = seat_edges(map, &comp, cfg, deepest, &mut scratch);
-        let seat_seen = edges.is_none();
+        // No edge joined, and no seat the scan saw (`None`).
+        let no_edge = edges.as_ref().is_some_and(Vec::is_empty);
         let edges = edges.unwrap_or_default();
         let mut shape = comp.clone();
         shape.extend_from_slice(&edges);
         let outline = Bounds::of(&shape);
-        let heights = sorted_heights(map, &comp);
-        let quantile = |q: f64| heights[to_usize((q * (heights.len() - 1) as f64).round())];
-        let mut level = quantile(cfg.level_quantile) - cfg.drop;
+        // The walls' heights, sorted only where a quantile is asked.
+        let heights = OnceCell::new();
+        let quantile = |q: f64| {
+            let h: &Vec<f64> = heights.get_or_init(|| sorted_heights(map, &comp));
+            h[to_usize((q * (h.len() - 1) as f64).round())]
+        };
         // With no seat's edge seen, walls that are a back and an arm running forward
         // from it (the other arm hidden) show the seat between them: an L's hull is
         // completed to the parallelogram of its legs, and the floor seen there counts as
         // seen under the seat, as where a seat's edge shows it. A ring or a corner of
         // one height (a bin, a bath, two low walls) has no back rising over an arm;
         // beside a seat the scan saw, the walls hide no other.
-        let arm = !seat_seen
-            && edges.is_empty()
-            && back_and_arm(map, &comp, level + cfg.back_rise, radius, &mut scratch);
-        let hull = Hull::of(&shape);
-        let hull = match hull {
-            Some(h) if arm => h.completed(&comp, deepest + 1).or(Some(h)),
-            h => h,
+        let arm = no_edge && {
+            let back = quantile(cfg.level_quantile) - cfg.drop + cfg.back_rise;
+            back_and_arm(map, &comp, back, radius, &mut scratch)
         };
-        let (Some(hull), Some(reach)) = (&hull, hull.as_ref().and_then(|h| h.bounds(map))) else {
+        let Some(mut hull) = Hull::of(&shape) else {
             continue;
         };
+        if let Some(l) = arm.then(|| hull.completed(&comp, deepest + 1)).flatten() {
+            hull = l;
+        }
+        let reach = hull.bounds(map);
         let across = (outline.x1 - outline.x0 + 1).min(outline.y1 - outline.y0 + 1);
         let floor_top = ((!edges.is_empty() || arm)
             && across as f64 * map.cell <= cfg.max_span + 1e-9)
@@ -201,11 +206,12 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
             floor_top,
             edges: None,
         };
-        let mut centres = hidden_centres(map, &reach, hull, radius, strict);
+        let mut centres = hidden_centres(map, &reach, &hull, radius, strict);
         if centres.is_empty() && floor_top.is_none() {
             continue;
         }
         let mut open = strict;
+        let mut level = quantile(cfg.level_quantile) - cfg.drop;
         // No such place, but the seat seen in part beside one: the places may hold the
         // seat's edges too (not at their centre), and the seat is at the edges' height.
         if centres.is_empty() && floor_top.is_some() && !edges.is_empty() {
@@ -213,7 +219,7 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
             let seat = seat[seat.len() / 2];
             if quantile(1.0 - cfg.level_quantile) - seat >= cfg.back_rise - 1e-9 {
                 open.edges = Some((cfg.edge_low, cfg.wall_low));
-                centres = hidden_centres(map, &reach, hull, radius, open);
+                centres = hidden_centres(map, &reach, &hull, radius, open);
                 level = seat;
             }
         }
@@ -546,12 +552,12 @@ impl Hull {
         (hull.len() >= 3).then_some(Hull(hull))
     }
 
-    /// This hull, of the wall cells `cells` (with a seat's edges, if any; walls at most
-    /// `thick` cells from their middle line), completed to the parallelogram of an L: with every vertex also mirrored through the middle
-    /// of the hull's widest chord (its two farthest vertices, the ends of an L's legs),
-    /// so that an L's corner finds its opposite. `None` unless every cell lies along the
-    /// two legs from the corner (the vertex farthest from the chord) to the chord's ends:
-    /// a U, a ring or a blob (a plant's leaves) is no L.
+    /// This hull, of the wall cells `cells` (at most `thick` cells from their middle
+    /// line), completed to the parallelogram of an L: with every vertex also mirrored
+    /// through the middle of the hull's widest chord (its two farthest vertices, the ends
+    /// of an L's legs), so that an L's corner finds its opposite. `None` unless every cell
+    /// lies along the two legs from the corner (the vertex farthest from the chord) to
+    /// the chord's ends: a U, a ring or a blob (a plant's leaves) is no L.
     fn completed(&self, cells: &[(usize, usize)], thick: usize) -> Option<Hull> {
         let v = &self.0;
         let mut ends = (v[0], v[0]);
@@ -586,24 +592,20 @@ impl Hull {
         Hull::of_points(pts)
     }
 
-    /// The box of the cells of `map` whose centres may lie inside, or `None` if it holds
-    /// none of them.
-    fn bounds(&self, map: &HeightMap) -> Option<Bounds> {
+    /// The box of the cells of `map` whose centres may lie inside (a hull of cells of the
+    /// map, completed beyond them or not, is clipped to it).
+    fn bounds(&self, map: &HeightMap) -> Bounds {
         let (mut x0, mut x1, mut y0, mut y1) = (i64::MAX, i64::MIN, i64::MAX, i64::MIN);
         for &(x, y) in &self.0 {
             (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
         }
-        let clamp = |v: i64, n: usize| usize::try_from(v.clamp(0, n as i64 - 1)).ok();
-        let (nx, ny) = (map.nx, map.ny);
-        if nx == 0 || ny == 0 || x1 < 0 || y1 < 0 || x0 >= nx as i64 || y0 >= ny as i64 {
-            return None;
+        let clip = |v: i64, n: usize| usize::try_from(v.clamp(0, n as i64 - 1)).unwrap_or(0);
+        Bounds {
+            x0: clip(x0, map.nx),
+            x1: clip(x1, map.nx),
+            y0: clip(y0, map.ny),
+            y1: clip(y1, map.ny),
         }
-        Some(Bounds {
-            x0: clamp(x0, nx)?,
-            x1: clamp(x1, nx)?,
-            y0: clamp(y0, ny)?,
-            y1: clamp(y1, ny)?,
-        })
     }
 
     /// Whether the centre of cell `(x, y)` lies strictly inside.

@@ -10,10 +10,12 @@
 //! is one "edge" of Eq. 3-4: its local score is exp(-(theta_d - theta_c)^2 / 2 sigma^2)
 //! (the squared differences averaged over its joints) on contact, epsilon otherwise.
 
+use std::cell::OnceCell;
+
 use crate::method::fit::{ContactConfig, Fit};
 use crate::method::scene::Scene;
 use crate::model::agent::{Agent, Cylinder, FkCache, Placement, Posture};
-use crate::model::hierarchy::{Fallback, Hierarchy, Node, Slide, Spread};
+use crate::model::hierarchy::{Behind, Fallback, Hierarchy, Node, Slide, Spread};
 use crate::num::to_usize;
 use nalgebra::{Point3, Rotation3, Vector3};
 
@@ -192,6 +194,7 @@ pub fn unfold(
                 node,
                 contact,
                 unseen_width: fit.unseen_width,
+                behind_here: OnceCell::new(),
             }
             .unfold(posture)
         };
@@ -290,6 +293,9 @@ pub struct NodeContext<'a> {
     /// ([`crate::method::hypotheses::Hypothesis::unseen_width`]): then no branch may stay
     /// untouched over unseen space (`unseen_sweeps`).
     pub unseen_width: bool,
+    /// The `behind` rule's answer at `place`, once asked (it reads the place only, and
+    /// every contact of the node's sweeps asks it).
+    behind_here: OnceCell<bool>,
 }
 
 impl NodeContext<'_> {
@@ -397,6 +403,13 @@ impl NodeContext<'_> {
         let Some(rule) = self.node.behind else {
             return true;
         };
+        *self
+            .behind_here
+            .get_or_init(|| self.seat_ends_behind(&rule))
+    }
+
+    /// The walks of [`behind`](Self::behind) under `rule`.
+    fn seat_ends_behind(&self, rule: &Behind) -> bool {
         let from = self.place.position;
         let back = Vector3::new(-self.place.yaw.cos(), -self.place.yaw.sin(), 0.0);
         let reach = rule.reach * self.agent.height;
@@ -1063,6 +1076,7 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
             node,
             contact: &CONTACT,
             unseen_width: false,
+            behind_here: OnceCell::new(),
         }
     }
 
@@ -1446,7 +1460,6 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
 
     #[test]
     fn behind_accepts_a_seat_with_its_back_or_rear_edge_and_refuses_a_beds_edge() {
-        use crate::model::hierarchy::Behind;
         let (a, h) = models();
         // A top at 0.45 m from x = `from` to 0.45 (its front edge), 0.6 m wide, points 1 cm
         // apart, with `more` points added; the body sits facing +x, its pelvis joint at x =

@@ -167,7 +167,8 @@ pub struct SurfaceRule {
 /// (its `tolerance` below, its `rise` above; unseen cells are no edge), in one of the
 /// orientations `turn` apart, shifted across by up to `shift`. The width of the surface
 /// round the place (the spread of its cells) passes where two seats meet at a corner; a
-/// body lies on a rectangle, and is laid along one that is flat ([`crate::method::hypotheses::flat_rectangles`]).
+/// body lies on a rectangle, and is laid along one that is flat
+/// ([`crate::method::hypotheses::flat_rectangles`]).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FlatRule {
@@ -402,11 +403,12 @@ pub struct Rear {
 /// A node's `behind` rule: a contact counts only if the seat the body sits on ends behind
 /// it: walking from the root joint against the body's heading, within `reach` something
 /// rises over the walk, between `rise` and `top` metres above the root joint (a back, a
-/// wall behind a backless seat), or the surface ends ([`crate::method::scene::Scene::seat_ends`],
-/// over unseen space as for `rear`, within `gap` below). An armrest belongs to a seat with
-/// its back, or its rear edge, a seat's depth behind the sitter; a body on a bed's side
-/// edge has the mattress going on behind it for the bed's width, and a bed's end board
-/// beside it is no armrest (the conventions' bed rule; an extension).
+/// wall behind a backless seat), or the surface ends
+/// ([`crate::method::scene::Scene::seat_ends`], over unseen space as for `rear`, within
+/// `gap` below). A rest belongs to a seat with its back, or its rear edge, a seat's depth
+/// behind the sitter; a body on a bed's side edge has the mattress going on behind it for
+/// the bed's width, and a bed's end board beside it is no armrest, nor a bag behind it a
+/// backrest (the conventions' bed rule; an extension).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Behind {
     /// Fraction of the body height H: how far behind the root joint the seat may go on.
@@ -1392,8 +1394,8 @@ fn resolve_node(
             })
         }
     };
-    // The walks of `rear`, `behind` and `beyond`: a reach in H and a gap below the pelvis under a
-    // metre (a metre below the pelvis is the floor under any seat).
+    // The walks of `rear`, `behind` and `beyond`: a reach in H and a gap below the pelvis
+    // under a metre (a metre below the pelvis is the floor under any seat).
     let walk = |name: &str, reach: f64, gap: f64| -> Result<(f64, f64), ModelError> {
         let key = key.key(name);
         Ok((
