@@ -730,6 +730,9 @@ pub struct SynthRequest {
     /// The range the camera of mesh and model views is held at, metres (`--camera-height`);
     /// `None` for [`afford_synth::dataset::CAMERA_HELD_M`].
     pub camera_height: Option<[f64; 2]>,
+    /// How far from the model's bounding box the camera of mesh and model views stands,
+    /// metres (`--camera-distance`); `None` for the default that keeps the model in view.
+    pub camera_distance: Option<[f64; 2]>,
 }
 
 /// Runs `afford synth`: with `--mesh`, one mesh that cannot be read does not stop the
@@ -753,6 +756,7 @@ pub fn run_synth(
         mixed_pixels: req.mixed_pixels,
         frame,
         camera_height: req.camera_height.unwrap_or(dataset::CAMERA_HELD_M),
+        camera_distance: req.camera_distance,
     };
     if let Some(labels) = &req.models {
         let s = dataset::views_of_labelled_models(labels, &req.out, req.seed, &views)?;

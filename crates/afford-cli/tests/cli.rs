@@ -288,31 +288,33 @@ fn synth_refuses_furniture_options_with_given_meshes() {
     assert!(!d.path().join("out").exists());
 }
 
-/// `--camera-height` sets the camera of mesh and model views only; with furniture it is
-/// refused, and a range that is not one is refused with what was wrong.
+/// `--camera-height` and `--camera-distance` set the camera of mesh and model views only:
+/// with furniture they are refused, and a range that is not one is refused with what was
+/// wrong.
 #[test]
-fn synth_takes_a_camera_height_for_given_meshes_only() {
+fn synth_takes_a_camera_height_and_distance_for_given_meshes_only() {
     let d = tmp();
     let out = p(d.path(), "out");
-    let o = afford(&["synth", "--out", &out, "--camera-height", "0.5,0.9"]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(text(&o.stderr).contains("--mesh"), "{}", text(&o.stderr));
-    for bad in ["0.9,0.5", "0,1", "1", "a,b", "0.5,11"] {
-        let o = afford(&[
-            "synth",
-            "--out",
-            &out,
-            "--mesh",
-            "x.ply",
-            "--camera-height",
-            bad,
-        ]);
-        assert_eq!(o.status.code(), Some(2), "{bad}");
-        assert!(
-            text(&o.stderr).contains("MIN,MAX"),
-            "{bad}: {}",
-            text(&o.stderr)
-        );
+    for flag in ["--camera-height", "--camera-distance"] {
+        let o = afford(&["synth", "--out", &out, flag, "0.5,0.9"]);
+        assert_eq!(o.status.code(), Some(2), "{flag}");
+        assert!(text(&o.stderr).contains("--mesh"), "{}", text(&o.stderr));
+        for bad in ["0.9,0.5", "0,1", "-1,1", "1", "a,b", "0.5,11"] {
+            let o = afford(&[
+                "synth",
+                "--out",
+                &out,
+                "--mesh",
+                "x.ply",
+                &format!("{flag}={bad}"),
+            ]);
+            assert_eq!(o.status.code(), Some(2), "{flag} {bad}");
+            assert!(
+                text(&o.stderr).contains("MIN,MAX"),
+                "{flag} {bad}: {}",
+                text(&o.stderr)
+            );
+        }
     }
     assert!(!d.path().join("out").exists());
 }

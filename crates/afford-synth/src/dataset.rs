@@ -1655,6 +1655,11 @@ pub struct MeshViews {
     pub frame: OutFrame,
     /// Lowest and highest the camera is held, metres above the floor (drawn uniformly).
     pub camera_height: [f64; 2],
+    /// Nearest and farthest the camera stands from the model, metres, horizontally from
+    /// the side of the model's bounding box it faces (drawn uniformly); `None` for 1.5-3.0
+    /// m from the model's centre plus 0.8 of its half-diagonal beyond 0.5 m, which keeps
+    /// most of the model in view.
+    pub camera_distance: Option<[f64; 2]>,
 }
 
 impl Default for MeshViews {
@@ -1667,6 +1672,7 @@ impl Default for MeshViews {
             mixed_pixels: 0.0,
             frame: OutFrame::World,
             camera_height: CAMERA_HELD_M,
+            camera_distance: None,
         }
     }
 }
@@ -1701,7 +1707,16 @@ pub fn render_mesh_views(
     for k in 0..how.views {
         let mut rng = ChaCha8Rng::seed_from_u64(mix(seed ^ mix(k as u64)));
         let az = u(&mut rng, -180.0, 180.0).to_radians();
-        let dist = u(&mut rng, 1.5, 3.0) + (r - 0.5).max(0.0) * 0.8;
+        let dist = match how.camera_distance {
+            None => u(&mut rng, 1.5, 3.0) + (r - 0.5).max(0.0) * 0.8,
+            Some([near, far]) => {
+                // From the centre to the box's side along the azimuth, then beyond it.
+                let (hx, hy) = ((hi.x - lo.x) / 2.0, (hi.y - lo.y) / 2.0);
+                let (c, s) = (az.cos().abs(), az.sin().abs());
+                let to_side = (hx / c.max(1e-9)).min(hy / s.max(1e-9));
+                to_side + u(&mut rng, near, far)
+            }
+        };
         let focus = (hi.z * 0.5).min(0.6);
         let mut cam = camera_at(
             &mut rng,
@@ -2484,5 +2499,36 @@ mod tests {
         };
         assert!(on_top("high", [1.5, 1.8]) > 100);
         assert_eq!(on_top("low", [0.3, 0.4]), 0);
+    }
+
+    /// `camera_distance` sets how far from the model's side the camera stands: seen from
+    /// 0.5-0.7 m the 0.5 m cube fills many more pixels than from 3.0-3.5 m, and in every
+    /// view some of it is seen.
+    #[test]
+    fn mesh_views_stand_at_the_camera_distance_asked() {
+        let d = tempfile::tempdir().unwrap();
+        let mesh = d.path().join("cube.ply");
+        cube_ply(&mesh);
+        let cube_points = |name: &str, near: f64, far: f64| {
+            let how = MeshViews {
+                views: 3,
+                camera_distance: Some([near, far]),
+                ..MeshViews::default()
+            };
+            let files = render_mesh_views(&mesh, &d.path().join(name), 4, &how).unwrap();
+            files
+                .iter()
+                .map(|f| {
+                    let pts = cloud::read_ply(f).unwrap();
+                    pts.iter()
+                        .filter(|p| p.z > 0.05 && p.x.abs().max(p.y.abs()) < 0.26)
+                        .count()
+                })
+                .collect::<Vec<_>>()
+        };
+        let (close, far) = (cube_points("close", 0.5, 0.7), cube_points("far", 3.0, 3.5));
+        assert!(far.iter().all(|&n| n > 20), "{far:?}");
+        let (least_close, most_far) = (close.iter().min().unwrap(), far.iter().max().unwrap());
+        assert!(*least_close > 4 * most_far, "{close:?} {far:?}");
     }
 }
