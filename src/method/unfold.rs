@@ -1410,6 +1410,38 @@ link = { name = "leg", from = [0.0, 0.0, 0.0], to = [0.0, 0.0, -0.5], radius = 0
         assert!(!with(&a, &h, &corner, &p, &node).rear(&[trunk]));
     }
 
+    /// A body on a pillow against a headboard, facing the foot of the bed: in front of the
+    /// pillow's edge the mattress lies 0.17 m lower and goes on for the bed's length. The
+    /// shanks cannot hang from so low a step: it is no seat's front edge, and the headboard
+    /// no backrest, under the built-in backrest's `rear` rule (a seat's edge drops 0.22 m
+    /// and more below its top). A chair's seat with the floor in front keeps its back.
+    #[test]
+    fn a_pillows_edge_is_no_seats_front_edge() {
+        let (a, h, backrest) = built_in_sitting();
+        let node = &h.nodes[backrest];
+        assert!(node.rear.is_some());
+        // The pillow's top at 0.45 m (0.35 m deep, from the headboard at x = 0), the
+        // mattress at 0.28 m from its edge on; the chair: a 0.45 m seat, the floor beyond.
+        let mut pillow = seat_and_back(35, false);
+        let mut chair = seat_and_back(45, false);
+        for i in 36..=200 {
+            for j in 0..=60 {
+                let (x, y) = (f64::from(i) * 0.01, -0.3 + f64::from(j) * 0.01);
+                pillow.push(Point3::new(x, y, 0.28));
+                if i > 45 {
+                    chair.push(Point3::new(x, y, 0.0));
+                }
+            }
+        }
+        let scene = |pts| Scene::new(&PointCloud::new(pts), &DetectConfig::default().scene);
+        let (pillow, chair) = (scene(pillow), scene(chair));
+        let p = seated(0.15);
+        let (trunk, _) = trunk_at_the_back();
+        assert!(pillow.touches(&trunk) && chair.touches(&trunk));
+        assert!(with(&a, &h, &chair, &p, node).rear(&[trunk]));
+        assert!(!with(&a, &h, &pillow, &p, node).rear(&[trunk]));
+    }
+
     #[test]
     fn rear_accepts_a_chair_back_and_refuses_a_headboard() {
         use crate::model::hierarchy::Rear;

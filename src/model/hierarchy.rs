@@ -2426,19 +2426,19 @@ mod tests {
 
     #[test]
     fn a_bad_rear_rule_is_named() {
-        let rule = "rear = { reach = 0.45, gap = 0.20, fan = 30.0 }";
+        let rule = "rear = { reach = 0.45, gap = 0.30, fan = 30.0 }";
         assert_eq!(BUILTIN_SITTING.matches(rule).count(), 1);
         let backrest = &load(BUILTIN_SITTING).unwrap().nodes[2];
         assert_eq!(backrest.id, "backrest");
         assert_eq!(
             backrest.rear.map(|r| (r.reach, r.gap, r.fan)),
-            Some((0.45, 0.2, 30f64.to_radians()))
+            Some((0.45, 0.3, 30f64.to_radians()))
         );
-        let (e, line) = edited(rule, "rear = { reach = 1.5, gap = 0.20, fan = 30.0 }");
+        let (e, line) = edited(rule, "rear = { reach = 1.5, gap = 0.30, fan = 30.0 }");
         names(&e, line, "node.backrest.rear.reach", "at most 1");
         let (e, line) = edited(rule, "rear = { reach = 0.45, gap = -0.1, fan = 30.0 }");
         names(&e, line, "node.backrest.rear.gap", "under 1 metre");
-        let (e, line) = edited(rule, "rear = { reach = 0.45, gap = 0.20, fan = 90.0 }");
+        let (e, line) = edited(rule, "rear = { reach = 0.45, gap = 0.30, fan = 90.0 }");
         names(&e, line, "node.backrest.rear.fan", "under 90 degrees");
     }
 
