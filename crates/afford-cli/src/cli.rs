@@ -104,19 +104,19 @@ struct SynthArgs {
     /// Lowest and highest the camera of the views of --mesh and --models is held, metres
     /// above the floor, as MIN,MAX (default 1.0,1.8: a person's hands or a tripod; a
     /// robot's camera is lower, 0.4-1.0 m). Only with --mesh or --models.
-    #[arg(long, value_name = "MIN,MAX", value_parser = camera_heights, requires = "given_meshes")]
+    #[arg(long, value_name = "MIN,MAX", value_parser = metre_range, requires = "given_meshes")]
     camera_height: Option<[f64; 2]>,
     /// Nearest and farthest the camera of the views of --mesh and --models stands from the
     /// model, metres, horizontally from the side of its bounding box it faces, as MIN,MAX
     /// (0 < MIN <= MAX <= 10; by default 1.5-3.0 m from the model's centre plus 0.8 of its
-    /// half-diagonal beyond 0.5 m, which keeps a bed whole in view; a person photographing
+    /// half-diagonal beyond 0.5 m, which keeps most of a model in view; a person photographing
     /// a bed from its side stands 0.5-1.5 m from it). Only with --mesh or --models.
-    #[arg(long, value_name = "MIN,MAX", value_parser = camera_heights, requires = "given_meshes")]
+    #[arg(long, value_name = "MIN,MAX", value_parser = metre_range, requires = "given_meshes")]
     camera_distance: Option<[f64; 2]>,
 }
 
 /// `MIN,MAX` camera heights or distances, metres: finite, 0 < MIN <= MAX <= 10.
-fn camera_heights(s: &str) -> Result<[f64; 2], String> {
+fn metre_range(s: &str) -> Result<[f64; 2], String> {
     let bad = || format!("'{s}' is not MIN,MAX in metres (0 < MIN <= MAX <= 10)");
     let (a, b) = s.split_once(',').ok_or_else(bad)?;
     let (a, b): (f64, f64) = (

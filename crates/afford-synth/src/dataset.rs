@@ -1681,7 +1681,8 @@ impl Default for MeshViews {
 /// `real-models/meshes/*.ply`) and writes `how.views` depth views of it standing on a
 /// floor, seen by the default Kinect-v1 camera (pixel stride `how.stride`) from random
 /// azimuths all around (the model's front is unknown), held between `how.camera_height`
-/// metres high, at a distance that fits the model in view, each in the frame `how.frame`. Files are
+/// metres high, at a distance that fits the model in view (or `how.camera_distance` from its
+/// box), each in the frame `how.frame`. Files are
 /// `<out_dir>/<stem>_vNN.ply` (binary, x y z); returns their paths. Deterministic for
 /// `seed`; the frame changes where a view's points are written, not which they are.
 pub fn render_mesh_views(
