@@ -556,10 +556,21 @@ fn find_floor(
     }
     let largest = planes.iter().map(|(_, c)| *c).max().unwrap_or(0);
     if largest == 0 {
-        return Err(FrameError::NoFloor(format!(
-            "no plane within {max_tilt} deg of the assumed up holds 2% of the points \
-             (is the up axis right?)"
-        )));
+        // A camera frame fixes the up axis; what is missing there is the floor itself (a
+        // view of a bed or a desk top from close by shows none).
+        let why = if sensor.is_some() {
+            format!(
+                "no plane within {max_tilt} deg of the camera's up (-y), below the camera, \
+                 holds 2% of the points: is the floor in view? (a view without it cannot \
+                 be levelled; give the transform to the world frame instead)"
+            )
+        } else {
+            format!(
+                "no plane within {max_tilt} deg of the assumed up holds 2% of the points \
+                 (is the up axis right? is the floor in view?)"
+            )
+        };
+        return Err(FrameError::NoFloor(why));
     }
     let below = |plane: &Plane| work.iter().filter(|p| plane.dist(p) < -BELOW_M).count();
     let large: Vec<(Plane, usize, usize)> = planes
@@ -1018,9 +1029,23 @@ mod tests {
             floor: FloorMode::Auto,
             ..Default::default()
         };
-        let e = to_world(PointCloud::new(wall), &opts).unwrap_err();
+        let e = to_world(PointCloud::new(wall.clone()), &opts).unwrap_err();
         assert!(matches!(e, FrameError::NoFloor(_)), "{e}");
+        assert!(e.to_string().contains("up axis right"), "{e}");
         assert!(to_world(PointCloud::default(), &opts).is_err());
+        // In a camera frame the up axis is known: the floor is out of view. The wall
+        // stands square in front of the camera (the plane z = 2 m, camera axes).
+        let ahead: Vec<Point3<f64>> = wall
+            .iter()
+            .map(|p| Point3::new(p.x - 1.0, 1.0 - p.z, 2.0))
+            .collect();
+        let camera = FrameOptions {
+            camera: true,
+            ..opts
+        };
+        let e = to_world(PointCloud::new(ahead), &camera).unwrap_err();
+        assert!(matches!(e, FrameError::NoFloor(_)), "{e}");
+        assert!(e.to_string().contains("floor in view"), "{e}");
     }
 
     #[test]
