@@ -1403,6 +1403,9 @@ fn resolve_node(
             gap_under_a_metre(src, &key.key("gap"), gap)?,
         ))
     };
+    // Another length of such a rule, in metres under a metre.
+    let metres =
+        |rule: &str, name: &str, m: f64| gap_under_a_metre(src, &key.key(rule).key(name), m);
     let rear = n
         .rear
         .as_ref()
@@ -1426,8 +1429,8 @@ fn resolve_node(
         .as_ref()
         .map(|r| {
             let (reach, gap) = walk("behind", r.reach, r.gap)?;
-            let top = gap_under_a_metre(src, &key.key("behind").key("top"), r.top)?;
-            let rise = gap_under_a_metre(src, &key.key("behind").key("rise"), r.rise)?;
+            let top = metres("behind", "top", r.top)?;
+            let rise = metres("behind", "rise", r.rise)?;
             if rise >= top {
                 return Err(src.invalid(
                     &key.key("behind").key("rise"),
@@ -1447,8 +1450,8 @@ fn resolve_node(
         .as_ref()
         .map(|r| {
             let (reach, gap) = walk("beyond", r.reach, r.gap)?;
-            let length = gap_under_a_metre(src, &key.key("beyond").key("length"), r.length)?;
-            let rise = gap_under_a_metre(src, &key.key("beyond").key("rise"), r.rise)?;
+            let length = metres("beyond", "length", r.length)?;
+            let rise = metres("beyond", "rise", r.rise)?;
             Ok::<_, ModelError>(Beyond {
                 reach,
                 gap,

@@ -2472,6 +2472,27 @@ mod tests {
         assert!((camera[0] - world[0]).norm() > 0.1);
     }
 
+    /// Renders `how`'s views of `mesh` into `out` (seed 4) and counts, per view, the
+    /// points `keep` takes.
+    fn points_per_view(
+        mesh: &Path,
+        out: &Path,
+        how: &MeshViews,
+        keep: impl Fn(&Point3<f64>) -> bool,
+    ) -> Vec<usize> {
+        let files = render_mesh_views(mesh, out, 4, how).unwrap();
+        files
+            .iter()
+            .map(|f| {
+                cloud::read_ply(f)
+                    .unwrap()
+                    .iter()
+                    .filter(|p| keep(p))
+                    .count()
+            })
+            .collect()
+    }
+
     /// `camera_height` sets how high the camera is held: above the 0.5 m cube it sees the
     /// cube's top, held below the top it sees none of it (at most its edges), as a robot's
     /// camera sees a desk or a cabinet.
@@ -2486,17 +2507,9 @@ mod tests {
                 camera_height,
                 ..MeshViews::default()
             };
-            let files = render_mesh_views(&mesh, &d.path().join(name), 4, &how).unwrap();
-            files
-                .iter()
-                .map(|f| {
-                    let top = cloud::read_ply(f).unwrap();
-                    top.iter()
-                        .filter(|p| (p.z - 0.5).abs() < 0.01 && p.x.abs().max(p.y.abs()) < 0.2)
-                        .count()
-                })
-                .min()
-                .unwrap()
+            let top = |p: &Point3<f64>| (p.z - 0.5).abs() < 0.01 && p.x.abs().max(p.y.abs()) < 0.2;
+            let counts = points_per_view(&mesh, &d.path().join(name), &how, top);
+            counts.into_iter().min().unwrap()
         };
         assert!(on_top("high", [1.5, 1.8]) > 100);
         assert_eq!(on_top("low", [0.3, 0.4]), 0);
@@ -2516,16 +2529,8 @@ mod tests {
                 camera_distance: Some([near, far]),
                 ..MeshViews::default()
             };
-            let files = render_mesh_views(&mesh, &d.path().join(name), 4, &how).unwrap();
-            files
-                .iter()
-                .map(|f| {
-                    let pts = cloud::read_ply(f).unwrap();
-                    pts.iter()
-                        .filter(|p| p.z > 0.05 && p.x.abs().max(p.y.abs()) < 0.26)
-                        .count()
-                })
-                .collect::<Vec<_>>()
+            let cube = |p: &Point3<f64>| p.z > 0.05 && p.x.abs().max(p.y.abs()) < 0.26;
+            points_per_view(&mesh, &d.path().join(name), &how, cube)
         };
         let (close, far) = (cube_points("close", 0.5, 0.7), cube_points("far", 3.0, 3.5));
         assert!(far.iter().all(|&n| n > 20), "{far:?}");
