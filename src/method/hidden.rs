@@ -30,6 +30,13 @@
 //! may hold the seat seen (not at their centre), and the rest is filled at its height,
 //! where the walls rise above it as a back does.
 //!
+//! An office chair pushed up to a desk and seen from behind has arms that end at the
+//! desk's edge, often at the desk's height: in the map they join the desk's top, and
+//! their component is as thick as the top. The surface is then taken out of the
+//! component and what is left beside it, if as thin as a chair's rails, is looked at as
+//! walls, with its hidden places outside the surface's hull (inside it, a place is a
+//! shadow on the surface: a duvet's behind a lump).
+//!
 //! The fill is as for holes ([`crate::method::holes::fill`],
 //! [`crate::method::holes::fill_points`]): the cells set in the height map and points
 //! added over them to the cloud the scene is built from (not to the segmented points).
@@ -55,6 +62,11 @@ pub struct HiddenConfig {
     /// in steps between side-by-side cells, from a cell of the walls to a cell that is not
     /// one of them, times the cell size.
     pub max_half_width: f64,
+    /// Half the widest a back or an arm joined to a surface is seen from above, metres
+    /// (as `max_half_width`): walls thicker than that are a surface where a square of
+    /// twice `max_half_width` fits in them, and what is left of them beside it is a
+    /// seat's walls only where it is this thin.
+    pub beside_half_width: f64,
     /// Radius of a hidden place, metres: no cell of the map is seen within it.
     pub clear: f64,
     /// The walls' level is this quantile of their cells' heights (0 the lowest).
@@ -96,6 +108,12 @@ impl Default for HiddenConfig {
             // backs 0.15-0.30 m, 2-3 cells from their edge at 0.05 m); a bed's mattress
             // with its pillows, a table's top or a counter's reach 6-12 cells in.
             max_half_width: 0.20,
+            // 0.10 m: an office chair pushed up to a desk, its arms joined to the desk's
+            // top (their height) in the map: the back and the arms 0.03-0.10 m thick; a
+            // bed's duvet seen between the shadows of its lumps leaves strips 0.2-0.4 m
+            // wide beside the flat parts, and 0.20 m filled false seats on 7 of 120
+            // messy-bed views.
+            beside_half_width: 0.10,
             // 0.15 m: about half an adult's hip width (0.30-0.35 m); an unseen gap
             // narrower than a body between walls is a gap, not a seat.
             clear: 0.15,
@@ -150,9 +168,7 @@ impl Default for HiddenConfig {
 /// the map with its holes filled.
 pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -> Vec<Hole> {
     let is_wall = |h: f64| (cfg.wall_low..=cfg.wall_high).contains(&h);
-    // Lengths in whole cells; the small offset keeps 0.15 / 0.05 at 3, not 4.
-    let cells = |len: f64| to_usize((len / map.cell - 1e-9).ceil());
-    let radius = cells(cfg.clear);
+    let radius = cells(map, cfg.clear);
     let deepest = to_usize((cfg.max_half_width / map.cell + 1e-9).floor());
     let mut walls = Bits::new(map);
     let mut scratch = Bits::new(map);
@@ -162,76 +178,13 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
             continue;
         }
         let comp = component(map, start, &is_wall, &mut walls);
-        let bounds = Bounds::of(&comp);
-        if half_width(&comp, &bounds) > deepest {
-            continue;
+        let (parts, surface) = thin_parts(comp, deepest, cells(map, cfg.beside_half_width));
+        // A place inside the surface's hull is a shadow on it (a bed's duvet behind a
+        // lump), not a seat beside it.
+        let beside_surface = |c: &(usize, usize)| surface.as_ref().is_none_or(|h| !h.contains(*c));
+        for comp in parts {
+            candidates.extend(candidate(map, &comp, cfg, &beside_surface, &mut scratch));
         }
-        // A seat's side edges joined to the walls widen the place they hold; where they
-        // show a seat no wider across than one, the floor under it counts as unseen.
-        let edges = seat_edges(map, &comp, cfg, deepest, &mut scratch);
-        // No edge joined, and no seat the scan saw (`None`).
-        let no_edge = edges.as_ref().is_some_and(Vec::is_empty);
-        let edges = edges.unwrap_or_default();
-        let mut shape = comp.clone();
-        shape.extend_from_slice(&edges);
-        let outline = Bounds::of(&shape);
-        // The walls' heights, sorted only where a quantile is asked.
-        let heights = OnceCell::new();
-        let quantile = |q: f64| {
-            let h: &Vec<f64> = heights.get_or_init(|| sorted_heights(map, &comp));
-            h[to_usize((q * (h.len() - 1) as f64).round())]
-        };
-        // With no seat's edge seen, walls that are a back and an arm running forward
-        // from it (the other arm hidden) show the seat between them: an L's hull is
-        // completed to the parallelogram of its legs, and the floor seen there counts as
-        // seen under the seat, as where a seat's edge shows it. A ring or a corner of
-        // one height (a bin, a bath, two low walls) has no back rising over an arm;
-        // beside a seat the scan saw, the walls hide no other.
-        let arm = no_edge && {
-            let back = quantile(cfg.level_quantile) - cfg.drop + cfg.back_rise;
-            back_and_arm(map, &comp, back, radius, &mut scratch)
-        };
-        let Some(mut hull) = Hull::of(&shape) else {
-            continue;
-        };
-        if let Some(l) = arm.then(|| hull.completed(&comp, deepest + 1)).flatten() {
-            hull = l;
-        }
-        let reach = hull.bounds(map);
-        let across = (outline.x1 - outline.x0 + 1).min(outline.y1 - outline.y0 + 1);
-        let floor_top = ((!edges.is_empty() || arm)
-            && across as f64 * map.cell <= cfg.max_span + 1e-9)
-            .then_some(cfg.floor_top);
-        let strict = Open {
-            floor_top,
-            edges: None,
-        };
-        let mut centres = hidden_centres(map, &reach, &hull, radius, strict);
-        if centres.is_empty() && floor_top.is_none() {
-            continue;
-        }
-        let mut open = strict;
-        let mut level = quantile(cfg.level_quantile) - cfg.drop;
-        // No such place, but the seat seen in part beside one: the places may hold the
-        // seat's edges too (not at their centre), and the seat is at the edges' height.
-        if centres.is_empty() && floor_top.is_some() && !edges.is_empty() {
-            let seat = sorted_heights(map, &edges);
-            let seat = seat[seat.len() / 2];
-            if quantile(1.0 - cfg.level_quantile) - seat >= cfg.back_rise - 1e-9 {
-                open.edges = Some((cfg.edge_low, cfg.wall_low));
-                centres = hidden_centres(map, &reach, &hull, radius, open);
-                level = seat;
-            }
-        }
-        if centres.is_empty() {
-            continue;
-        }
-        candidates.push(Candidate {
-            centres,
-            open,
-            level,
-            middle: quantile(0.5),
-        });
     }
     if candidates.is_empty() {
         return Vec::new();
@@ -292,6 +245,91 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
         }
     }
     out
+}
+
+/// `len` metres in whole cells of `map`, rounded up; the small offset keeps 0.15 / 0.05 at
+/// 3, not 4.
+fn cells(map: &HeightMap, len: f64) -> usize {
+    to_usize((len / map.cell - 1e-9).ceil())
+}
+
+/// The hidden places of one thin wall component `comp` of `map` (see [`hidden_seats`]),
+/// those that `beside` keeps, and the seat's height there; `None` where it hides none.
+/// `scratch` is scratch space, all clear on entry and on return.
+fn candidate(
+    map: &HeightMap,
+    comp: &[(usize, usize)],
+    cfg: &HiddenConfig,
+    beside: &impl Fn(&(usize, usize)) -> bool,
+    scratch: &mut Bits,
+) -> Option<Candidate> {
+    let radius = cells(map, cfg.clear);
+    let deepest = to_usize((cfg.max_half_width / map.cell + 1e-9).floor());
+    // A seat's side edges joined to the walls widen the place they hold; where they
+    // show a seat no wider across than one, the floor under it counts as unseen.
+    let edges = seat_edges(map, comp, cfg, deepest, scratch);
+    // No edge joined, and no seat the scan saw (`None`).
+    let no_edge = edges.as_ref().is_some_and(Vec::is_empty);
+    let edges = edges.unwrap_or_default();
+    let mut shape = comp.to_vec();
+    shape.extend_from_slice(&edges);
+    let outline = Bounds::of(&shape);
+    // The walls' heights, sorted only where a quantile is asked.
+    let heights = OnceCell::new();
+    let quantile = |q: f64| {
+        let h: &Vec<f64> = heights.get_or_init(|| sorted_heights(map, comp));
+        h[to_usize((q * (h.len() - 1) as f64).round())]
+    };
+    // With no seat's edge seen, walls that are a back and an arm running forward
+    // from it (the other arm hidden) show the seat between them: an L's hull is
+    // completed to the parallelogram of its legs, and the floor seen there counts as
+    // seen under the seat, as where a seat's edge shows it. A ring or a corner of
+    // one height (a bin, a bath, two low walls) has no back rising over an arm;
+    // beside a seat the scan saw, the walls hide no other.
+    let arm = no_edge && {
+        let back = quantile(cfg.level_quantile) - cfg.drop + cfg.back_rise;
+        back_and_arm(map, comp, back, radius, scratch)
+    };
+    let mut hull = Hull::of(&shape)?;
+    if let Some(l) = arm.then(|| hull.completed(comp, deepest + 1)).flatten() {
+        hull = l;
+    }
+    let reach = hull.bounds(map);
+    let across = (outline.x1 - outline.x0 + 1).min(outline.y1 - outline.y0 + 1);
+    let floor_top = ((!edges.is_empty() || arm) && across as f64 * map.cell <= cfg.max_span + 1e-9)
+        .then_some(cfg.floor_top);
+    let strict = Open {
+        floor_top,
+        edges: None,
+    };
+    let mut centres = hidden_centres(map, &reach, &hull, radius, strict);
+    centres.retain(beside);
+    if centres.is_empty() && floor_top.is_none() {
+        return None;
+    }
+    let mut open = strict;
+    let mut level = quantile(cfg.level_quantile) - cfg.drop;
+    // No such place, but the seat seen in part beside one: the places may hold the
+    // seat's edges too (not at their centre), and the seat is at the edges' height.
+    if centres.is_empty() && floor_top.is_some() && !edges.is_empty() {
+        let seat = sorted_heights(map, &edges);
+        let seat = seat[seat.len() / 2];
+        if quantile(1.0 - cfg.level_quantile) - seat >= cfg.back_rise - 1e-9 {
+            open.edges = Some((cfg.edge_low, cfg.wall_low));
+            centres = hidden_centres(map, &reach, &hull, radius, open);
+            centres.retain(beside);
+            level = seat;
+        }
+    }
+    if centres.is_empty() {
+        return None;
+    }
+    Some(Candidate {
+        centres,
+        open,
+        level,
+        middle: quantile(0.5),
+    })
 }
 
 /// The hidden places of one thin wall component, before the points seen in them are
@@ -490,6 +528,136 @@ impl Bounds {
 /// cell not in it (1 at its edge): half the width of the widest part, in cells. Two
 /// passes of the city-block distance transform over the component's box with a border.
 fn half_width(comp: &[(usize, usize)], b: &Bounds) -> usize {
+    distances(comp, b).0.into_iter().max().unwrap_or(0)
+}
+
+/// The thin parts of the wall component `comp`, and the hull of the surface they were
+/// joined to. Where `comp` is thin (at most `deepest` cells from its edge, see
+/// [`half_width`]) it is its one part, with no surface. Else the surface is every square
+/// of `2 deepest + 1` cells that fits inside it (a desk's top an office chair's arms are
+/// joined to, a bed's mattress, a table), and the parts what is left, joined through
+/// sides and corners, in the order of `comp`, those at most `thin` cells from their edge.
+/// A rectangular surface leaves nothing, a round or ragged one slivers of its edge.
+fn thin_parts(
+    comp: Vec<(usize, usize)>,
+    deepest: usize,
+    thin: usize,
+) -> (Vec<Vec<(usize, usize)>>, Option<Hull>) {
+    let b = Bounds::of(&comp);
+    if half_width(&comp, &b) <= deepest {
+        return (vec![comp], None);
+    }
+    // Inside the component's box with a border of one cell, row by row.
+    let w = b.x1 - b.x0 + 3;
+    let at = |(x, y): (usize, usize)| (y - b.y0 + 1) * w + (x - b.x0 + 1);
+    let round = |k: usize| {
+        [
+            k - w - 1,
+            k - w,
+            k - w + 1,
+            k - 1,
+            k + 1,
+            k + w - 1,
+            k + w,
+            k + w + 1,
+        ]
+    };
+    let mut inside = vec![false; w * (b.y1 - b.y0 + 3)];
+    for &c in &comp {
+        inside[at(c)] = true;
+    }
+    // Steps through sides and corners from the nearest cell a square's centre fits on
+    // (its chessboard distance to the outside over `deepest`), up to `deepest`.
+    let squares = chessboard(&inside, w);
+    let mut from_centre = vec![usize::MAX; inside.len()];
+    let mut queue: Vec<usize> = Vec::new();
+    for &c in &comp {
+        if squares[at(c)] > deepest {
+            from_centre[at(c)] = 0;
+            queue.push(at(c));
+        }
+    }
+    let mut next = 0;
+    while next < queue.len() {
+        let k = queue[next];
+        next += 1;
+        if from_centre[k] == deepest {
+            continue;
+        }
+        for n in round(k) {
+            if inside[n] && from_centre[n] == usize::MAX {
+                from_centre[n] = from_centre[k] + 1;
+                queue.push(n);
+            }
+        }
+    }
+    let mut left: Vec<bool> = inside
+        .iter()
+        .zip(&from_centre)
+        .map(|(&i, &f)| i && f == usize::MAX)
+        .collect();
+    let surface: Vec<(usize, usize)> = comp.iter().copied().filter(|&c| !left[at(c)]).collect();
+    let mut parts = Vec::new();
+    for &c in &comp {
+        if !left[at(c)] {
+            continue;
+        }
+        left[at(c)] = false;
+        let mut part = vec![at(c)];
+        let mut next = 0;
+        while next < part.len() {
+            for n in round(part[next]) {
+                if left[n] {
+                    left[n] = false;
+                    part.push(n);
+                }
+            }
+            next += 1;
+        }
+        let part: Vec<(usize, usize)> = part
+            .into_iter()
+            .map(|k| (k % w + b.x0 - 1, k / w + b.y0 - 1))
+            .collect();
+        if half_width(&part, &Bounds::of(&part)) <= thin {
+            parts.push(part);
+        }
+    }
+    (parts, Hull::of(&surface))
+}
+
+/// The chessboard distance transform of the cells set in `inside` (a grid of rows of `w`
+/// cells whose border row and column are clear): steps through sides and corners to the
+/// nearest clear cell, 0 on clear cells.
+fn chessboard(inside: &[bool], w: usize) -> Vec<usize> {
+    let h = inside.len() / w;
+    let mut d: Vec<usize> = inside
+        .iter()
+        .map(|&i| if i { usize::MAX / 2 } else { 0 })
+        .collect();
+    for j in 1..h - 1 {
+        for i in 1..w - 1 {
+            let k = j * w + i;
+            if d[k] > 0 {
+                let m = d[k - 1].min(d[k - w - 1]).min(d[k - w]).min(d[k - w + 1]);
+                d[k] = d[k].min(m + 1);
+            }
+        }
+    }
+    for j in (1..h - 1).rev() {
+        for i in (1..w - 1).rev() {
+            let k = j * w + i;
+            if d[k] > 0 {
+                let m = d[k + 1].min(d[k + w + 1]).min(d[k + w]).min(d[k + w - 1]);
+                d[k] = d[k].min(m + 1);
+            }
+        }
+    }
+    d
+}
+
+/// The city-block distance transform of `comp` over its box `b` with a border of one cell
+/// (0 outside the component, 1 at its edge), and the row length of that grid.
+fn distances(comp: &[(usize, usize)], b: &Bounds) -> (Vec<usize>, usize) {
     let (w, h) = (b.x1 - b.x0 + 3, b.y1 - b.y0 + 3);
     let mut d = vec![0usize; w * h];
     for &(x, y) in comp {
@@ -503,17 +671,15 @@ fn half_width(comp: &[(usize, usize)], b: &Bounds) -> usize {
             }
         }
     }
-    let mut deepest = 0;
     for j in (1..h - 1).rev() {
         for i in (1..w - 1).rev() {
             let k = j * w + i;
             if d[k] > 0 {
                 d[k] = d[k].min(d[k + 1] + 1).min(d[k + w] + 1);
-                deepest = deepest.max(d[k]);
             }
         }
     }
-    deepest
+    (d, w)
 }
 
 /// The convex hull of cell centres, counter-clockwise, in cell units.
@@ -731,6 +897,67 @@ mod tests {
             (14, 15, 10, 19, 0.62),
         ];
         assert!(hidden_seats(&map_with(&narrow), &[], &HiddenConfig::default()).is_empty());
+    }
+
+    #[test]
+    fn a_chair_whose_arms_meet_a_desk_in_the_map_still_hides_its_seat() {
+        // An office chair pushed up to a desk, seen from behind: the desk's top (0.75 m,
+        // 0.60 m deep) along y 2-13, the chair's arms at the top's height running from
+        // it to the back (0.90 m) along y 21-22; the seat between them unseen. The top
+        // joins the arms in the map and is too thick for a wall.
+        let desk = (4, 25, 2, 13, 0.75);
+        let chair = [
+            desk,
+            (8, 9, 14, 20, 0.75),
+            (20, 21, 14, 20, 0.75),
+            (8, 21, 21, 22, 0.90),
+        ];
+        let cfg = HiddenConfig::default();
+        let found = hidden_seats(&map_with(&chair), &[], &cfg);
+        assert_eq!(found.len(), 1);
+        assert!(found[0].cells.contains(&(15, 17)));
+        // Below the arms' level, as for walls standing alone; nothing on the desk.
+        assert!((found[0].height - 0.60).abs() < 1e-9);
+        assert!(found[0].cells.iter().all(|&(_, y)| y > 13));
+        // The same with arms 0.25 m wide (a sofa's, or the strips a bed's duvet leaves
+        // between its lumps' shadows beside its flat part): not a chair's walls.
+        let wide = [
+            desk,
+            (5, 9, 14, 20, 0.75),
+            (20, 24, 14, 20, 0.75),
+            (5, 24, 21, 22, 0.90),
+        ];
+        assert!(hidden_seats(&map_with(&wide), &[], &cfg).is_empty());
+        let at_most = HiddenConfig {
+            beside_half_width: 0.20,
+            ..cfg
+        };
+        assert_eq!(hidden_seats(&map_with(&wide), &[], &at_most).len(), 1);
+    }
+
+    #[test]
+    fn a_shadow_inside_a_surface_is_no_seat_beside_it() {
+        // A bed's duvet (0.60 m) seen either side of a lump's shadow, flat parts 0.45 m
+        // wide, and across the shadow's near end a pillow's edge (0.70 m) from one to the
+        // other with two thin folds (0.62 m) running into it: a U of walls round an
+        // unseen place 0.40 m wide, as a chair's, but between the parts of the surface.
+        let bed = [
+            (0, 8, 0, 29, 0.60),
+            (21, 29, 0, 29, 0.60),
+            (9, 20, 24, 25, 0.70),
+            (10, 10, 5, 23, 0.62),
+            (19, 19, 5, 23, 0.62),
+        ];
+        assert!(hidden_seats(&map_with(&bed), &[], &HiddenConfig::default()).is_empty());
+        // The same walls with the duvet's flat parts seen lower (not walls): a seat.
+        let low: Vec<_> = bed
+            .iter()
+            .map(|&(a, b, c, d, z)| (a, b, c, d, if z == 0.60 { 0.40 } else { z }))
+            .collect();
+        assert_eq!(
+            hidden_seats(&map_with(&low), &[], &HiddenConfig::default()).len(),
+            1
+        );
     }
 
     /// A 30 x 30 map of 0.05 m cells, the floor (0.0) seen everywhere but under `walls`.
