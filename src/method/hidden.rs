@@ -35,7 +35,9 @@
 //! their component is as thick as the top. The surface is then taken out of the
 //! component and what is left beside it, if as thin as a chair's rails, is looked at as
 //! walls, with its hidden places outside the surface's hull (inside it, a place is a
-//! shadow on the surface: a duvet's behind a lump).
+//! shadow on the surface: a duvet's behind a lump). Such a seat goes on under the desk's
+//! top, so a place may also hold cells seen a thigh's room above the seat that are not
+//! the walls' own (not at its centre; they are not filled).
 //!
 //! The fill is as for holes ([`crate::method::holes::fill`],
 //! [`crate::method::holes::fill_points`]): the cells set in the height map and points
@@ -91,6 +93,10 @@ pub struct HiddenConfig {
     /// height, if the walls' highest tenth (the quantile `1 - level_quantile`, the mirror
     /// of their level) rises at least this many metres above it.
     pub back_rise: f64,
+    /// A cell seen between these many metres above the hidden seat's height (inclusive),
+    /// not one of the walls, may lie in a hidden place (not at its centre): a top over
+    /// the seat.
+    pub under_room: (f64, f64),
 }
 
 impl Default for HiddenConfig {
@@ -147,6 +153,11 @@ impl Default for HiddenConfig {
             // stands 0.05-0.10 m over its side seen at seat height (two wide-mix night
             // stands were sat in without this).
             back_rise: 0.20,
+            // 0.20-0.40 m: a desk's or a table's top over a chair pushed up to it stands
+            // 0.20-0.35 m above the seat (room for the thighs; the walls' own arms stand
+            // `drop`, 0.15 m, above it and are walls anyway); a shelf's board higher over
+            // the place is no top a seated body's thighs go under.
+            under_room: (0.20, 0.40),
         }
     }
 }
@@ -222,8 +233,10 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
         let mut cells = Vec::new();
         for c in centres {
             let surface = |n: (usize, usize)| {
-                top.get(&n)
-                    .is_some_and(|&z| (z - middle).abs() <= cfg.surface_tolerance)
+                !open.is_over(map, n)
+                    && top
+                        .get(&n)
+                        .is_some_and(|&z| (z - middle).abs() <= cfg.surface_tolerance)
             };
             if disc(map, c, radius).any(surface) {
                 continue;
@@ -298,17 +311,18 @@ fn candidate(
     let across = (outline.x1 - outline.x0 + 1).min(outline.y1 - outline.y0 + 1);
     let floor_top = ((!edges.is_empty() || arm) && across as f64 * map.cell <= cfg.max_span + 1e-9)
         .then_some(cfg.floor_top);
+    let mut level = quantile(cfg.level_quantile) - cfg.drop;
     let strict = Open {
         floor_top,
         edges: None,
+        over: Some((level + cfg.under_room.0, level + cfg.under_room.1)),
     };
-    let mut centres = hidden_centres(map, &reach, &hull, radius, strict);
-    centres.retain(beside);
-    if centres.is_empty() && floor_top.is_none() {
-        return None;
+    for &c in comp {
+        scratch.set(c, true);
     }
+    let mut centres = hidden_centres(map, &reach, &hull, radius, strict, scratch);
+    centres.retain(beside);
     let mut open = strict;
-    let mut level = quantile(cfg.level_quantile) - cfg.drop;
     // No such place, but the seat seen in part beside one: the places may hold the
     // seat's edges too (not at their centre), and the seat is at the edges' height.
     if centres.is_empty() && floor_top.is_some() && !edges.is_empty() {
@@ -316,10 +330,14 @@ fn candidate(
         let seat = seat[seat.len() / 2];
         if quantile(1.0 - cfg.level_quantile) - seat >= cfg.back_rise - 1e-9 {
             open.edges = Some((cfg.edge_low, cfg.wall_low));
-            centres = hidden_centres(map, &reach, &hull, radius, open);
+            open.over = Some((seat + cfg.under_room.0, seat + cfg.under_room.1));
+            centres = hidden_centres(map, &reach, &hull, radius, open, scratch);
             centres.retain(beside);
             level = seat;
         }
+    }
+    for &c in comp {
+        scratch.set(c, false);
     }
     if centres.is_empty() {
         return None;
@@ -376,6 +394,10 @@ struct Open {
     /// Cells between these heights, metres (low inclusive; a seat's edges, seen), may lie
     /// in a place, though not at its centre.
     edges: Option<(f64, f64)>,
+    /// Cells seen between these heights, metres, other than the walls' own, may lie in a
+    /// place, though not at its centre: a top over the seat (a desk's a chair is pushed
+    /// up to) hides it as the walls' shadow does.
+    over: Option<(f64, f64)>,
 }
 
 impl Open {
@@ -388,12 +410,20 @@ impl Open {
         }
     }
 
-    /// Whether cell `c` may lie in a place.
-    fn held(&self, map: &HeightMap, c: (usize, usize)) -> bool {
+    /// Whether cell `c` may lie in a place; `walls` marks the walls' own cells.
+    fn held(&self, map: &HeightMap, c: (usize, usize), walls: &Bits) -> bool {
         self.centre(map, c)
             || self
                 .edges
                 .is_some_and(|(lo, hi)| height(map, c).is_some_and(|h| (lo..hi).contains(&h)))
+            || self.is_over(map, c) && !walls.get(c)
+    }
+
+    /// Whether cell `c` is seen between the heights of `over` (inclusive).
+    fn is_over(&self, map: &HeightMap, c: (usize, usize)) -> bool {
+        self.over.is_some_and(|(lo, hi)| {
+            height(map, c).is_some_and(|h| (lo - 1e-9..=hi + 1e-9).contains(&h))
+        })
     }
 }
 
@@ -784,13 +814,15 @@ impl Hull {
 
 /// The centres of the hidden places inside `hull` (within `b`): the cells counting as
 /// unseen under `open` with nothing within `radius` cells but cells `open` lets a place
-/// hold (the map's border counts as unseen), row by row.
+/// hold (the map's border counts as unseen; `walls` marks the walls' own cells), row by
+/// row.
 fn hidden_centres(
     map: &HeightMap,
     b: &Bounds,
     hull: &Hull,
     radius: usize,
     open: Open,
+    walls: &Bits,
 ) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
     for y in b.y0..=b.y1 {
@@ -798,7 +830,7 @@ fn hidden_centres(
             let c = (x, y);
             if open.centre(map, c)
                 && hull.contains(c)
-                && disc(map, c, radius).all(|n| open.held(map, n))
+                && disc(map, c, radius).all(|n| open.held(map, n, walls))
             {
                 out.push(c);
             }
@@ -1004,6 +1036,35 @@ mod tests {
             ..cfg
         };
         assert!(!hidden_seats(&floor_map_with(&corner), &[], &wide).is_empty());
+    }
+
+    #[test]
+    fn a_seat_pushed_under_a_desk_is_filled_beside_the_desks_top() {
+        // A chair without arms pushed up to a desk, seen from behind: its back, the seat's
+        // side edge running from it to the desk's top (0.75 m, from y 17 on), the floor
+        // seen elsewhere. Between the back's rail and the desk there are 0.25 m, less than
+        // a place's width: the seat goes on under the top.
+        let chair = [
+            ARMLESS_BACK[0],
+            ARMLESS_BACK[1],
+            (19, 19, 12, 16, 0.45),
+            (5, 24, 17, 28, 0.75),
+        ];
+        let cfg = HiddenConfig::default();
+        let holes = hidden_seats(&floor_map_with(&chair), &[], &cfg);
+        assert_eq!(holes.len(), 1);
+        assert!(holes[0].cells.contains(&(15, 15)));
+        // Only what the scan did not see (the floor under the seat) is filled, at the
+        // height of the seat's edge (the walls' hull, a thin triangle, holds no place:
+        // the seat is seen in part beside them); the top stays as it is.
+        assert!((holes[0].height - 0.45).abs() < 1e-9);
+        assert!(holes[0].cells.iter().all(|&(_, y)| (12..17).contains(&y)));
+        // A top that leaves no room for the thighs over the seat does not hide it.
+        let no_room = HiddenConfig {
+            under_room: (0.35, 0.60),
+            ..cfg
+        };
+        assert!(hidden_seats(&floor_map_with(&chair), &[], &no_room).is_empty());
     }
 
     #[test]
