@@ -558,7 +558,11 @@ impl Bounds {
 /// cell not in it (1 at its edge): half the width of the widest part, in cells. Two
 /// passes of the city-block distance transform over the component's box with a border.
 fn half_width(comp: &[(usize, usize)], b: &Bounds) -> usize {
-    distances(comp, b).0.into_iter().max().unwrap_or(0)
+    let (inside, w) = box_grid(comp, b);
+    distance_transform(&inside, w, false)
+        .into_iter()
+        .max()
+        .unwrap_or(0)
 }
 
 /// The thin parts of the wall component `comp`, and the hull of the surface they were
@@ -574,11 +578,15 @@ fn thin_parts(
     thin: usize,
 ) -> (Vec<Vec<(usize, usize)>>, Option<Hull>) {
     let b = Bounds::of(&comp);
-    if half_width(&comp, &b) <= deepest {
+    let (inside, w) = box_grid(&comp, &b);
+    if distance_transform(&inside, w, false)
+        .into_iter()
+        .max()
+        .unwrap_or(0)
+        <= deepest
+    {
         return (vec![comp], None);
     }
-    // Inside the component's box with a border of one cell, row by row.
-    let w = b.x1 - b.x0 + 3;
     let at = |(x, y): (usize, usize)| (y - b.y0 + 1) * w + (x - b.x0 + 1);
     let round = |k: usize| {
         [
@@ -592,13 +600,9 @@ fn thin_parts(
             k + w + 1,
         ]
     };
-    let mut inside = vec![false; w * (b.y1 - b.y0 + 3)];
-    for &c in &comp {
-        inside[at(c)] = true;
-    }
     // Steps through sides and corners from the nearest cell a square's centre fits on
     // (its chessboard distance to the outside over `deepest`), up to `deepest`.
-    let squares = chessboard(&inside, w);
+    let squares = distance_transform(&inside, w, true);
     let mut from_centre = vec![usize::MAX; inside.len()];
     let mut queue: Vec<usize> = Vec::new();
     for &c in &comp {
@@ -655,10 +659,22 @@ fn thin_parts(
     (parts, Hull::of(&surface))
 }
 
-/// The chessboard distance transform of the cells set in `inside` (a grid of rows of `w`
-/// cells whose border row and column are clear): steps through sides and corners to the
-/// nearest clear cell, 0 on clear cells.
-fn chessboard(inside: &[bool], w: usize) -> Vec<usize> {
+/// `cells` set in their box `b` with a border of one clear cell, row by row, and the row
+/// length.
+fn box_grid(cells: &[(usize, usize)], b: &Bounds) -> (Vec<bool>, usize) {
+    let w = b.x1 - b.x0 + 3;
+    let mut inside = vec![false; w * (b.y1 - b.y0 + 3)];
+    for &(x, y) in cells {
+        inside[(y - b.y0 + 1) * w + (x - b.x0 + 1)] = true;
+    }
+    (inside, w)
+}
+
+/// The distance transform of the cells set in `inside` (rows of `w` cells whose border
+/// row and column are clear): steps to the nearest clear cell through sides (city block)
+/// or, with `corners`, through sides and corners (chessboard); 0 on clear cells, 1 at
+/// the edge. Two passes.
+fn distance_transform(inside: &[bool], w: usize, corners: bool) -> Vec<usize> {
     let h = inside.len() / w;
     let mut d: Vec<usize> = inside
         .iter()
@@ -668,7 +684,10 @@ fn chessboard(inside: &[bool], w: usize) -> Vec<usize> {
         for i in 1..w - 1 {
             let k = j * w + i;
             if d[k] > 0 {
-                let m = d[k - 1].min(d[k - w - 1]).min(d[k - w]).min(d[k - w + 1]);
+                let mut m = d[k - 1].min(d[k - w]);
+                if corners {
+                    m = m.min(d[k - w - 1]).min(d[k - w + 1]);
+                }
                 d[k] = d[k].min(m + 1);
             }
         }
@@ -677,39 +696,15 @@ fn chessboard(inside: &[bool], w: usize) -> Vec<usize> {
         for i in (1..w - 1).rev() {
             let k = j * w + i;
             if d[k] > 0 {
-                let m = d[k + 1].min(d[k + w + 1]).min(d[k + w]).min(d[k + w - 1]);
+                let mut m = d[k + 1].min(d[k + w]);
+                if corners {
+                    m = m.min(d[k + w + 1]).min(d[k + w - 1]);
+                }
                 d[k] = d[k].min(m + 1);
             }
         }
     }
     d
-}
-
-/// The city-block distance transform of `comp` over its box `b` with a border of one cell
-/// (0 outside the component, 1 at its edge), and the row length of that grid.
-fn distances(comp: &[(usize, usize)], b: &Bounds) -> (Vec<usize>, usize) {
-    let (w, h) = (b.x1 - b.x0 + 3, b.y1 - b.y0 + 3);
-    let mut d = vec![0usize; w * h];
-    for &(x, y) in comp {
-        d[(y - b.y0 + 1) * w + (x - b.x0 + 1)] = usize::MAX / 2;
-    }
-    for j in 1..h - 1 {
-        for i in 1..w - 1 {
-            let k = j * w + i;
-            if d[k] > 0 {
-                d[k] = d[k].min(d[k - 1] + 1).min(d[k - w] + 1);
-            }
-        }
-    }
-    for j in (1..h - 1).rev() {
-        for i in (1..w - 1).rev() {
-            let k = j * w + i;
-            if d[k] > 0 {
-                d[k] = d[k].min(d[k + 1] + 1).min(d[k + w] + 1);
-            }
-        }
-    }
-    (d, w)
 }
 
 /// The convex hull of cell centres, counter-clockwise, in cell units.
