@@ -117,7 +117,7 @@ impl Default for HiddenConfig {
             // 0.10 m: an office chair pushed up to a desk, its arms joined to the desk's
             // top (their height) in the map: the back and the arms 0.03-0.10 m thick; a
             // bed's duvet seen between the shadows of its lumps leaves strips 0.2-0.4 m
-            // wide beside the flat parts, and 0.20 m filled false seats on 7 of 120
+            // wide beside the flat parts, and 0.20 m added false rests on 8 of 120
             // messy-bed views.
             beside_half_width: 0.10,
             // 0.15 m: about half an adult's hip width (0.30-0.35 m); an unseen gap
@@ -194,7 +194,14 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
         // lump), not a seat beside it.
         let beside_surface = |c: &(usize, usize)| surface.as_ref().is_none_or(|h| !h.contains(*c));
         for comp in parts {
-            candidates.extend(candidate(map, &comp, cfg, &beside_surface, &mut scratch));
+            candidates.extend(candidate(
+                map,
+                &comp,
+                cfg,
+                (radius, deepest),
+                &beside_surface,
+                &mut scratch,
+            ));
         }
     }
     if candidates.is_empty() {
@@ -268,16 +275,16 @@ fn cells(map: &HeightMap, len: f64) -> usize {
 
 /// The hidden places of one thin wall component `comp` of `map` (see [`hidden_seats`]),
 /// those that `beside` keeps, and the seat's height there; `None` where it hides none.
-/// `scratch` is scratch space, all clear on entry and on return.
+/// `radius` and `deepest` are `cfg.clear` and `cfg.max_half_width` in cells. `scratch` is
+/// scratch space, all clear on entry and on return.
 fn candidate(
     map: &HeightMap,
     comp: &[(usize, usize)],
     cfg: &HiddenConfig,
+    (radius, deepest): (usize, usize),
     beside: &impl Fn(&(usize, usize)) -> bool,
     scratch: &mut Bits,
 ) -> Option<Candidate> {
-    let radius = cells(map, cfg.clear);
-    let deepest = to_usize((cfg.max_half_width / map.cell + 1e-9).floor());
     // A seat's side edges joined to the walls widen the place they hold; where they
     // show a seat no wider across than one, the floor under it counts as unseen.
     let edges = seat_edges(map, comp, cfg, deepest, scratch);
@@ -655,6 +662,9 @@ fn thin_parts(
         if half_width(&part, &Bounds::of(&part)) <= thin {
             parts.push(part);
         }
+    }
+    if parts.is_empty() {
+        return (parts, None);
     }
     (parts, Hull::of(&surface))
 }
