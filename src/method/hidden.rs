@@ -39,6 +39,14 @@
 //! top, so a place may also hold cells seen a thigh's room above the seat that are not
 //! the walls' own (not at its centre; they are not filled).
 //!
+//! Seen squarely from behind, a sofa, a bench or a chair shows its back alone: a straight
+//! wall, no arm and no seat's edge running forward, with the floor seen up to it on the
+//! camera's side and next to nothing on the other, where its seat is. Such a back, as long as a seat is wide (not a
+//! room's wall) and joined to nothing higher than a wall (not the rest of a room's wall
+//! whose top the image's edge cuts aslant, nor a counter's top), hides places on its
+//! unseen side within a seat's depth, filled a back's height below its top: a guess at
+//! the seat's height, since nothing of the seat shows.
+//!
 //! The fill is as for holes ([`crate::method::holes::fill`],
 //! [`crate::method::holes::fill_points`]): the cells set in the height map and points
 //! added over them to the cloud the scene is built from (not to the segmented points).
@@ -51,7 +59,7 @@ use nalgebra::Point3;
 
 use crate::method::heightmap::HeightMap;
 use crate::method::holes::{beside, Bits, Hole};
-use crate::num::{to_isize, to_usize};
+use crate::num::{to_i64, to_isize, to_usize};
 
 /// Which hidden places are filled, and at what height.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,6 +105,20 @@ pub struct HiddenConfig {
     /// not one of the walls, may lie in a hidden place (not at its centre): a top over
     /// the seat.
     pub under_room: (f64, f64),
+    /// A straight wall alone (no arm, no seat's edge running forward from it), between
+    /// these many metres long, standing free over the floor seen beside it on one side,
+    /// with little seen on the other, is a back seen from behind: its hidden places lie on
+    /// the other side, within `lone_depth` metres of its middle line ([`lone_back`]).
+    pub lone_length: (f64, f64),
+    /// How far from a lone back's middle line its hidden places' centres lie at most,
+    /// metres.
+    pub lone_depth: f64,
+    /// A lone back's seat is filled this many metres below the back's top (the walls'
+    /// highest tenth, the quantile `1 - level_quantile`).
+    pub lone_drop: f64,
+    /// A lone back's top is level: the line fitted to its heights along it (least
+    /// squares) rises at most this many metres from one end to the other.
+    pub lone_level: f64,
 }
 
 impl Default for HiddenConfig {
@@ -158,6 +180,20 @@ impl Default for HiddenConfig {
             // `drop`, 0.15 m, above it and are walls anyway); a shelf's board higher over
             // the place is no top a seated body's thighs go under.
             under_room: (0.20, 0.40),
+            // 0.35-2.50 m: a chair's back is 0.35-0.50 m wide, a three-seat sofa's
+            // 2.0-2.5 m; a room's wall seen no higher than a back (the image's top edge
+            // cutting it) runs on for metres.
+            lone_length: (0.35, 2.50),
+            // 0.40 m: a seat is 0.40-0.60 m deep from its back; the places' discs
+            // (`clear`) reach 0.15 m further.
+            lone_depth: 0.40,
+            // 0.40 m: a back's top stands 0.35-0.50 m above its seat (dining chairs and
+            // benches 0.35-0.45, sofas 0.40-0.50); nothing of the seat shows to say more.
+            lone_drop: 0.40,
+            // 0.10 m: a back's top is level, its rounded ends or arms lower at both ends
+            // alike; a room's wall whose top the image's edge cuts aslant rises along it
+            // through the walls' band (0.2-0.5 m over a sofa's length).
+            lone_level: 0.10,
         }
     }
 }
@@ -171,7 +207,9 @@ impl Default for HiddenConfig {
 /// and a span of at most `max_span`, the floor counts as unseen; and where that still
 /// leaves no place, places may also hold the edges (not at their centre), their floor and
 /// unseen cells filled at the edges' median height if the walls' highest tenth rises
-/// `back_rise` above it (a seat seen in part beside its back). `seen` is every point the
+/// `back_rise` above it (a seat seen in part beside its back). Walls that are one straight
+/// back alone hide their places on the side the scan did not see ([`lone_back`]), filled
+/// `lone_drop` below the walls' highest tenth. `seen` is every point the
 /// scan saw, world frame: also the specks left out of the map, so that a sparse top seen
 /// at a grazing angle, whose scattered points are specks, is not taken for a space the
 /// scan never saw. Components are taken in the order of [`HeightMap::cells_at_least`]; a
@@ -310,11 +348,15 @@ fn candidate(
         let back = quantile(cfg.level_quantile) - cfg.drop + cfg.back_rise;
         back_and_arm(map, comp, back, radius, scratch)
     };
-    let mut hull = Hull::of(&shape)?;
-    if let Some(l) = arm.then(|| hull.completed(comp, deepest + 1)).flatten() {
-        hull = l;
+    // Cells on one line have no hull: only a lone back (below) may hide a place then.
+    let mut hull = Hull::of(&shape);
+    if let Some(l) = hull
+        .as_ref()
+        .filter(|_| arm)
+        .and_then(|h| h.completed(comp, deepest + 1))
+    {
+        hull = Some(l);
     }
-    let reach = hull.bounds(map);
     let across = (outline.x1 - outline.x0 + 1).min(outline.y1 - outline.y0 + 1);
     let floor_top = ((!edges.is_empty() || arm) && across as f64 * map.cell <= cfg.max_span + 1e-9)
         .then_some(cfg.floor_top);
@@ -327,7 +369,12 @@ fn candidate(
     for &c in comp {
         scratch.set(c, true);
     }
-    let mut centres = hidden_centres(map, &reach, &hull, radius, strict, scratch);
+    let places = |open: Open, scratch: &Bits| {
+        hull.as_ref().map_or_else(Vec::new, |h| {
+            hidden_centres(map, &h.bounds(map), h, radius, open, scratch)
+        })
+    };
+    let mut centres = places(strict, scratch);
     centres.retain(beside);
     let mut open = strict;
     // No such place, but the seat seen in part beside one: the places may hold the
@@ -338,7 +385,22 @@ fn candidate(
         if quantile(1.0 - cfg.level_quantile) - seat >= cfg.back_rise - 1e-9 {
             open.edges = Some((cfg.edge_low, cfg.wall_low));
             open.over = Some((seat + cfg.under_room.0, seat + cfg.under_room.1));
-            centres = hidden_centres(map, &reach, &hull, radius, open, scratch);
+            centres = places(open, scratch);
+            centres.retain(beside);
+            level = seat;
+        }
+    }
+    // No such place, and the walls are one straight back alone, the floor seen beside
+    // it on one side only: the seat is on the other side, below the back.
+    if centres.is_empty() && !arm {
+        let seat = quantile(1.0 - cfg.level_quantile) - cfg.lone_drop;
+        if let Some(lone) = lone_back(map, &shape, cfg, (radius, deepest)) {
+            open = Open {
+                floor_top: None,
+                edges: None,
+                over: Some((seat + cfg.under_room.0, seat + cfg.under_room.1)),
+            };
+            centres = hidden_centres(map, &lone.bounds(map), &lone, radius, open, scratch);
             centres.retain(beside);
             level = seat;
         }
@@ -355,6 +417,150 @@ fn candidate(
         level,
         middle: quantile(0.5),
     })
+}
+
+/// The rectangle in which a lone back `comp` of `map` hides its seat, if the component is
+/// one: cells all within `deepest + 1` of the segment between its two farthest cells, that
+/// segment `cfg.lone_length` long, and beside it (from the walls' edge out to `radius`
+/// cells, along its length) the cells on one side at most a quarter seen and on the
+/// other side at least half seen, every seen one lower than `cfg.floor_top` (the floor
+/// behind a back, seen from behind it). The rectangle runs along the segment, from its middle line to
+/// `cfg.lone_depth` on the unseen side. `radius` and `deepest` are `cfg.clear` and
+/// `cfg.max_half_width` in cells.
+fn lone_back(
+    map: &HeightMap,
+    comp: &[(usize, usize)],
+    cfg: &HiddenConfig,
+    (radius, deepest): (usize, usize),
+) -> Option<Hull> {
+    let pts: Vec<(i64, i64)> = comp.iter().map(|&(x, y)| (x as i64, y as i64)).collect();
+    // The two farthest cells: the ends of the back. Over the hull's vertices where
+    // there is a hull (few), over the cells on a line.
+    let ends_of = |v: &[(i64, i64)]| {
+        let mut best = (-1, (v[0], v[0]));
+        for (i, &a) in v.iter().enumerate() {
+            for &b in &v[i + 1..] {
+                let d = (a.0 - b.0).pow(2) + (a.1 - b.1).pow(2);
+                if d > best.0 {
+                    best = (d, (a, b));
+                }
+            }
+        }
+        best
+    };
+    let (d2, (a, b)) = match Hull::of(comp) {
+        Some(h) => ends_of(&h.0),
+        None => ends_of(&pts),
+    };
+    let length = (d2 as f64).sqrt();
+    let (lo, hi) = cfg.lone_length;
+    if !(lo / map.cell - 1e-9..=hi / map.cell + 1e-9).contains(&length) || length < 1.0 {
+        return None;
+    }
+    // Along the back (u) and across it (n), in cells.
+    let u = ((b.0 - a.0) as f64 / length, (b.1 - a.1) as f64 / length);
+    let n = (-u.1, u.0);
+    let at = |c: (i64, i64)| {
+        let (ex, ey) = ((c.0 - a.0) as f64, (c.1 - a.1) as f64);
+        (ex * u.0 + ey * u.1, ex * n.0 + ey * n.1)
+    };
+    let thick = (deepest + 1) as f64;
+    // A back stands free: nothing higher than a wall joins it (the rest of a room's wall
+    // whose top the image's edge cuts aslant, a counter's top).
+    let higher = |c: &(usize, usize)| {
+        (-1..=1).any(|dy| {
+            (-1..=1).any(|dx| {
+                beside(map, *c, (dx, dy))
+                    .and_then(|n| height(map, n))
+                    .is_some_and(|h| h > cfg.wall_high)
+            })
+        })
+    };
+    if comp.iter().any(higher) {
+        return None;
+    }
+    // How far the walls reach from the line on either side.
+    let (mut t0, mut t1) = (0.0f64, 0.0f64);
+    for &c in &pts {
+        let t = at(c).1;
+        (t0, t1) = (t0.min(t), t1.max(t));
+    }
+    // A back is a line: at most `deepest + 1` cells either side of the segment, and at
+    // least twice as long as it is thick (not a stool's seat or a post seen from above).
+    if t1 - t0 > 2.0 * thick + 1e-9 || 2.0 * (t1 - t0 + 1.0) > length + 1e-9 {
+        return None;
+    }
+    // The top's rise from one end to the other: the least-squares line of the walls'
+    // heights over their places along the back.
+    let walls: Vec<(f64, f64)> = comp
+        .iter()
+        .filter_map(|&c| {
+            height(map, c)
+                .filter(|&h| h >= cfg.wall_low)
+                .map(|h| (c, h))
+        })
+        .map(|((x, y), h)| (at((x as i64, y as i64)).0, h))
+        .collect();
+    let k = walls.len().max(1) as f64;
+    let (ms, mh) = walls
+        .iter()
+        .fold((0.0, 0.0), |(a, b), &(s, h)| (a + s / k, b + h / k));
+    let (sh, ss) = walls.iter().fold((0.0, 0.0), |(a, b), &(s, h)| {
+        (a + (s - ms) * (h - mh), b + (s - ms) * (s - ms))
+    });
+    if ss <= 0.0 || (sh / ss).abs() * length > cfg.lone_level + 1e-9 {
+        return None;
+    }
+    // Beside the walls along their length: per side, cells looked at, seen, seen low.
+    let mut sides = [(0usize, 0usize, 0usize); 2];
+    let r = radius as f64;
+    let span = to_i64((t1.max(-t0) + r).ceil()) + 1;
+    let (x0, x1) = (a.0.min(b.0) - span, a.0.max(b.0) + span);
+    let (y0, y1) = (a.1.min(b.1) - span, a.1.max(b.1) + span);
+    for y in y0.max(0)..=y1.min(map.ny as i64 - 1) {
+        for x in x0.max(0)..=x1.min(map.nx as i64 - 1) {
+            let (s, t) = at((x, y));
+            if !(0.0..=length).contains(&s)
+                || !(t0 - r..=t1 + r).contains(&t)
+                || (t0..=t1).contains(&t)
+            {
+                continue;
+            }
+            let side = &mut sides[usize::from(t > 0.0)];
+            side.0 += 1;
+            let (Ok(cx), Ok(cy)) = (usize::try_from(x), usize::try_from(y)) else {
+                continue;
+            };
+            if let Some(h) = height(map, (cx, cy)) {
+                side.1 += 1;
+                side.2 += usize::from(h < cfg.floor_top);
+            }
+        }
+    }
+    // The seat's side: nothing seen; the other: at least half seen, all of it low.
+    let seen_low = |(all, seen, low): (usize, usize, usize)| 2 * seen >= all && low == seen;
+    let unseen = |(all, seen, _): (usize, usize, usize)| all > 0 && 4 * seen <= all;
+    let sign = match sides {
+        [front, back] if unseen(back) && seen_low(front) => 1.0,
+        [front, back] if unseen(front) && seen_low(back) => -1.0,
+        _ => return None,
+    };
+    let depth = sign * cfg.lone_depth / map.cell;
+    let far = |p: (i64, i64)| {
+        (
+            to_i64((p.0 as f64 + depth * n.0).round()),
+            to_i64((p.1 as f64 + depth * n.1).round()),
+        )
+    };
+    // The seat lies inside what the scan covers (a shadow with the scan going on past
+    // it), not beyond the map's border.
+    let inside =
+        |(x, y): (i64, i64)| (0..map.nx as i64).contains(&x) && (0..map.ny as i64).contains(&y);
+    let (fa, fb) = (far(a), far(b));
+    if !(inside(fa) && inside(fb)) {
+        return None;
+    }
+    Hull::of_points(vec![a, b, fa, fb])
 }
 
 /// The hidden places of one thin wall component, before the points seen in them are
@@ -934,6 +1140,67 @@ mod tests {
             (14, 15, 10, 19, 0.62),
         ];
         assert!(hidden_seats(&map_with(&narrow), &[], &HiddenConfig::default()).is_empty());
+    }
+
+    #[test]
+    fn a_back_alone_hides_its_seat_on_the_side_the_scan_did_not_see() {
+        // A sofa's back (0.85 m, 0.70 m long, 0.15 m thick) seen from behind: the floor
+        // seen up to it on the camera's side (y below 12), nothing beyond it.
+        let back = [(8, 21, 12, 14, 0.85)];
+        let floor_to = |last: usize| move |_: usize, y: usize| (y <= last).then_some(0.0);
+        let cfg = HiddenConfig::default();
+        let found = hidden_seats(&painted(floor_to(11), &back), &[], &cfg);
+        assert_eq!(found.len(), 1);
+        // The seat is `lone_drop` below the back's top, on the unseen side, within
+        // `lone_depth` and a place's radius of the back's line and its ends.
+        assert!((found[0].height - 0.45).abs() < 1e-9);
+        assert!(found[0].cells.contains(&(15, 18)));
+        assert!(found[0]
+            .cells
+            .iter()
+            .all(|&(x, y)| (15..=25).contains(&y) && (5..=24).contains(&x)));
+        // Turned to face the other way (the floor seen beyond it, nothing before it).
+        let turned = painted(|_, y| (y >= 15).then_some(0.0), &back);
+        let found = hidden_seats(&turned, &[], &cfg);
+        assert_eq!(found.len(), 1);
+        assert!(found[0].cells.iter().all(|&(_, y)| y < 12));
+        // The floor seen on both sides (a low partition), or on neither: which side the
+        // seat is on, if any, is not shown.
+        let both = painted(|_, y| (!(12..=14).contains(&y)).then_some(0.0), &back);
+        assert!(hidden_seats(&both, &[], &cfg).is_empty());
+        // The floor seen right behind it as well (under an open back), unseen further on.
+        let open = painted(|_, y| (y < 12 || y == 15 || y == 16).then_some(0.0), &back);
+        assert!(hidden_seats(&open, &[], &cfg).is_empty());
+        assert!(hidden_seats(&painted(|_, _| None, &back), &[], &cfg).is_empty());
+        // Something higher than the floor right beside it on the camera's side (a low
+        // cabinet's top, 0.48 m): not a back standing free over the floor.
+        let cabinet = [back[0], (8, 21, 9, 10, 0.48)];
+        assert!(hidden_seats(&painted(floor_to(11), &cabinet), &[], &cfg).is_empty());
+        // Longer than `lone_length` allows (a room's wall cut by the image's edge).
+        let short = HiddenConfig {
+            lone_length: (0.35, 0.60),
+            ..cfg
+        };
+        assert!(hidden_seats(&painted(floor_to(11), &back), &[], &short).is_empty());
+        // Joined to something higher than a wall at its end (a room's wall whose top
+        // the image's edge cuts aslant, rising past `wall_high`): not standing free.
+        let cut = [back[0], (22, 27, 12, 14, 1.3)];
+        assert!(hidden_seats(&painted(floor_to(11), &cut), &[], &cfg).is_empty());
+        // Its top rising along it (0.60 to 0.86 m: a room's wall whose top the image's
+        // edge cuts aslant), or as thick as it is long (a bar stool's seat, 0.80 m):
+        // not a back.
+        let aslant: Vec<_> = (8..=21)
+            .map(|x| (x, x, 12, 14, 0.60 + 0.02 * (x - 8) as f64))
+            .collect();
+        assert!(hidden_seats(&painted(floor_to(11), &aslant), &[], &cfg).is_empty());
+        let stool = [(12, 18, 12, 18, 0.80)];
+        assert!(hidden_seats(&painted(floor_to(11), &stool), &[], &cfg).is_empty());
+        // Narrower than a place: no seat behind a post.
+        let post = [(14, 16, 12, 14, 0.85)];
+        assert!(hidden_seats(&painted(floor_to(11), &post), &[], &cfg).is_empty());
+        // At the map's edge, the seat's side past the border: nothing the scan covers.
+        let edge = [(8, 21, 20, 22, 0.85)];
+        assert!(hidden_seats(&painted(floor_to(19), &edge), &[], &cfg).is_empty());
     }
 
     #[test]
