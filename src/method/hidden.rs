@@ -41,11 +41,12 @@
 //!
 //! Seen squarely from behind, a sofa, a bench or a chair shows its back alone: a straight
 //! wall, no arm and no seat's edge running forward, with the floor seen up to it on the
-//! camera's side and next to nothing on the other, where its seat is. Such a back, as long as a seat is wide (not a
-//! room's wall) and joined to nothing higher than a wall (not the rest of a room's wall
-//! whose top the image's edge cuts aslant, nor a counter's top), hides places on its
-//! unseen side within a seat's depth, filled a back's height below its top: a guess at
-//! the seat's height, since nothing of the seat shows.
+//! camera's side and next to nothing on the other, where its seat is. Such a back, as
+//! long as a seat is wide (not a room's wall), level, and joined to nothing higher than a
+//! wall (not the rest of a room's wall whose top the image's edge cuts aslant, nor a
+//! counter's top), hides places on its unseen side within a seat's depth, filled a
+//! back's height below its top: a guess at the seat's height, since nothing of the seat
+//! shows.
 //!
 //! The fill is as for holes ([`crate::method::holes::fill`],
 //! [`crate::method::holes::fill_points`]): the cells set in the height map and points
@@ -419,14 +420,16 @@ fn candidate(
     })
 }
 
-/// The rectangle in which a lone back `comp` of `map` hides its seat, if the component is
-/// one: cells all within `deepest + 1` of the segment between its two farthest cells, that
-/// segment `cfg.lone_length` long, and beside it (from the walls' edge out to `radius`
-/// cells, along its length) the cells on one side at most a quarter seen and on the
-/// other side at least half seen, every seen one lower than `cfg.floor_top` (the floor
-/// behind a back, seen from behind it). The rectangle runs along the segment, from its middle line to
-/// `cfg.lone_depth` on the unseen side. `radius` and `deepest` are `cfg.clear` and
-/// `cfg.max_half_width` in cells.
+/// The rectangle in which the walls `comp` of `map` (with any seat's edges joined) hide a
+/// seat as a back alone, if they are one: cells all within `deepest + 1` of the segment
+/// between the two farthest, that segment `cfg.lone_length` long and at least twice as
+/// long as they are thick, the least-squares line of the walls' heights along it rising
+/// at most `cfg.lone_level`, no cell higher than `cfg.wall_high` joined, and beside them
+/// (out to `radius` cells from them, along the segment) the cells on one side at least
+/// half seen, every seen one lower than `cfg.floor_top` (the floor behind a back, seen
+/// from behind it), and on the other at most a quarter seen. The rectangle runs along the
+/// segment from its line to `cfg.lone_depth` on that other side, and lies inside the
+/// map. `radius` and `deepest` are `cfg.clear` and `cfg.max_half_width` in cells.
 fn lone_back(
     map: &HeightMap,
     comp: &[(usize, usize)],
@@ -434,23 +437,11 @@ fn lone_back(
     (radius, deepest): (usize, usize),
 ) -> Option<Hull> {
     let pts: Vec<(i64, i64)> = comp.iter().map(|&(x, y)| (x as i64, y as i64)).collect();
-    // The two farthest cells: the ends of the back. Over the hull's vertices where
-    // there is a hull (few), over the cells on a line.
-    let ends_of = |v: &[(i64, i64)]| {
-        let mut best = (-1, (v[0], v[0]));
-        for (i, &a) in v.iter().enumerate() {
-            for &b in &v[i + 1..] {
-                let d = (a.0 - b.0).pow(2) + (a.1 - b.1).pow(2);
-                if d > best.0 {
-                    best = (d, (a, b));
-                }
-            }
-        }
-        best
-    };
+    // The two farthest cells, the ends of the back: among the hull's vertices where
+    // there is a hull (few), among the cells on a line.
     let (d2, (a, b)) = match Hull::of(comp) {
-        Some(h) => ends_of(&h.0),
-        None => ends_of(&pts),
+        Some(h) => farthest_pair(&h.0),
+        None => farthest_pair(&pts),
     };
     let length = (d2 as f64).sqrt();
     let (lo, hi) = cfg.lone_length;
@@ -537,7 +528,8 @@ fn lone_back(
             }
         }
     }
-    // The seat's side: nothing seen; the other: at least half seen, all of it low.
+    // The camera's side: at least half seen, all of it the floor; the seat's: at most a
+    // quarter seen.
     let seen_low = |(all, seen, low): (usize, usize, usize)| 2 * seen >= all && low == seen;
     let unseen = |(all, seen, _): (usize, usize, usize)| all > 0 && 4 * seen <= all;
     let sign = match sides {
@@ -926,6 +918,24 @@ fn distance_transform(inside: &[bool], w: usize, corners: bool) -> Vec<usize> {
 /// The convex hull of cell centres, counter-clockwise, in cell units.
 struct Hull(Vec<(i64, i64)>);
 
+/// A cell's centre, in cell units.
+type Point = (i64, i64);
+
+/// The two points of `v` (not empty) farthest apart, the first such pair in order, and
+/// their squared distance.
+fn farthest_pair(v: &[Point]) -> (i64, (Point, Point)) {
+    let mut best = (-1, (v[0], v[0]));
+    for (i, &a) in v.iter().enumerate() {
+        for &b in &v[i + 1..] {
+            let d = (a.0 - b.0).pow(2) + (a.1 - b.1).pow(2);
+            if d > best.0 {
+                best = (d, (a, b));
+            }
+        }
+    }
+    best
+}
+
 /// Twice the signed area of the triangle `o a b`: positive when `b` is left of `o -> a`.
 fn cross(o: (i64, i64), a: (i64, i64), b: (i64, i64)) -> i64 {
     (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
@@ -967,17 +977,7 @@ impl Hull {
     /// the chord's ends: a U, a ring or a blob (a plant's leaves) is no L.
     fn completed(&self, cells: &[(usize, usize)], thick: usize) -> Option<Hull> {
         let v = &self.0;
-        let mut ends = (v[0], v[0]);
-        let mut widest = -1;
-        for (i, &a) in v.iter().enumerate() {
-            for &b in &v[i + 1..] {
-                let d = (a.0 - b.0).pow(2) + (a.1 - b.1).pow(2);
-                if d > widest {
-                    (widest, ends) = (d, (a, b));
-                }
-            }
-        }
-        let (a, b) = ends;
+        let (_, (a, b)) = farthest_pair(v);
         // The corner: the vertex farthest from the chord; every cell within `thick` of
         // one of the two legs from it to the chord's ends.
         let corner = *v.iter().max_by_key(|&&p| cross(a, b, p).abs())?;
