@@ -362,10 +362,12 @@ fn candidate(
     let floor_top = ((!edges.is_empty() || arm) && across as f64 * map.cell <= cfg.max_span + 1e-9)
         .then_some(cfg.floor_top);
     let mut level = quantile(cfg.level_quantile) - cfg.drop;
+    // A top over a seat at `seat` metres hides it as the walls' shadow does.
+    let over = |seat: f64| Some((seat + cfg.under_room.0, seat + cfg.under_room.1));
     let strict = Open {
         floor_top,
         edges: None,
-        over: Some((level + cfg.under_room.0, level + cfg.under_room.1)),
+        over: over(level),
     };
     for &c in comp {
         scratch.set(c, true);
@@ -385,7 +387,7 @@ fn candidate(
         let seat = seat[seat.len() / 2];
         if quantile(1.0 - cfg.level_quantile) - seat >= cfg.back_rise - 1e-9 {
             open.edges = Some((cfg.edge_low, cfg.wall_low));
-            open.over = Some((seat + cfg.under_room.0, seat + cfg.under_room.1));
+            open.over = over(seat);
             centres = places(open, scratch);
             centres.retain(beside);
             level = seat;
@@ -395,11 +397,11 @@ fn candidate(
     // it on one side only: the seat is on the other side, below the back.
     if centres.is_empty() && !arm {
         let seat = quantile(1.0 - cfg.level_quantile) - cfg.lone_drop;
-        if let Some(lone) = lone_back(map, &shape, cfg, (radius, deepest)) {
+        if let Some(lone) = lone_back(map, &shape, hull.as_ref(), cfg, (radius, deepest)) {
             open = Open {
                 floor_top: None,
                 edges: None,
-                over: Some((seat + cfg.under_room.0, seat + cfg.under_room.1)),
+                over: over(seat),
             };
             centres = hidden_centres(map, &lone.bounds(map), &lone, radius, open, scratch);
             centres.retain(beside);
@@ -429,20 +431,19 @@ fn candidate(
 /// half seen, every seen one lower than `cfg.floor_top` (the floor behind a back, seen
 /// from behind it), and on the other at most a quarter seen. The rectangle runs along the
 /// segment from its line to `cfg.lone_depth` on that other side, and lies inside the
-/// map. `radius` and `deepest` are `cfg.clear` and `cfg.max_half_width` in cells.
+/// map. `hull` is the cells' convex hull (`None` on a line); `radius` and `deepest` are
+/// `cfg.clear` and `cfg.max_half_width` in cells.
 fn lone_back(
     map: &HeightMap,
     comp: &[(usize, usize)],
+    hull: Option<&Hull>,
     cfg: &HiddenConfig,
     (radius, deepest): (usize, usize),
 ) -> Option<Hull> {
     let pts: Vec<(i64, i64)> = comp.iter().map(|&(x, y)| (x as i64, y as i64)).collect();
     // The two farthest cells, the ends of the back: among the hull's vertices where
     // there is a hull (few), among the cells on a line.
-    let (d2, (a, b)) = match Hull::of(comp) {
-        Some(h) => farthest_pair(&h.0),
-        None => farthest_pair(&pts),
-    };
+    let (d2, (a, b)) = farthest_pair(hull.map_or(&pts, |h| &h.0));
     let length = (d2 as f64).sqrt();
     let (lo, hi) = cfg.lone_length;
     if !(lo / map.cell - 1e-9..=hi / map.cell + 1e-9).contains(&length) || length < 1.0 {
