@@ -46,7 +46,9 @@
 //! wall (not the rest of a room's wall whose top the image's edge cuts aslant, nor a
 //! counter's top), hides places on its unseen side within a seat's depth, filled a
 //! back's height below its top: a guess at the seat's height, since nothing of the seat
-//! shows.
+//! shows. Seen a little from above, the floor may show under the seat as well, between
+//! its legs; then the back itself tells the seat's side: reclined over its seat, it shows
+//! its lower rows beside its top edge on that side.
 //!
 //! The fill is as for holes ([`crate::method::holes::fill`],
 //! [`crate::method::holes::fill_points`]): the cells set in the height map and points
@@ -120,6 +122,12 @@ pub struct HiddenConfig {
     /// A lone back's top is level: the line fitted to its heights along it (least
     /// squares) rises at most this many metres from one end to the other.
     pub lone_level: f64,
+    /// A lone back's top edge: its cells within this many metres of its top.
+    pub lone_edge: f64,
+    /// With the floor seen on both sides of a lone back, its seat lies on the side its
+    /// cells' middle lies at least this many metres from its top edge's (a back reclined
+    /// over its seat shows its lower rows there).
+    pub lone_fall: f64,
 }
 
 impl Default for HiddenConfig {
@@ -195,6 +203,12 @@ impl Default for HiddenConfig {
             // alike; a room's wall whose top the image's edge cuts aslant rises along it
             // through the walls' band (0.2-0.5 m over a sofa's length).
             lone_level: 0.10,
+            // 0.10 m: a back's top edge, seen from above; a back reclined 5-15 degrees
+            // shows its rows 0.05 m nearer the seat 0.2-0.6 m lower.
+            lone_edge: 0.10,
+            // 0.05 m, one cell: a back reclined 5-15 degrees over 0.3-0.5 m of height
+            // leans 0.03-0.13 m; a partition or a room's wall stands upright.
+            lone_fall: 0.05,
         }
     }
 }
@@ -209,8 +223,9 @@ impl Default for HiddenConfig {
 /// leaves no place, places may also hold the edges (not at their centre), their floor and
 /// unseen cells filled at the edges' median height if the walls' highest tenth rises
 /// `back_rise` above it (a seat seen in part beside its back). Walls that are one straight
-/// back alone hide their places on the side the scan did not see ([`lone_back`]), filled
-/// `lone_drop` below the walls' highest tenth. `seen` is every point the
+/// back alone hide their places on the side the scan did not see, or, with the floor seen
+/// on both sides, on the side the back leans towards ([`lone_back`]), filled `lone_drop`
+/// below the walls' highest tenth. `seen` is every point the
 /// scan saw, world frame: also the specks left out of the map, so that a sparse top seen
 /// at a grazing angle, whose scattered points are specks, is not taken for a space the
 /// scan never saw. Components are taken in the order of [`HeightMap::cells_at_least`]; a
@@ -397,9 +412,9 @@ fn candidate(
     // it on one side only: the seat is on the other side, below the back.
     if centres.is_empty() && !arm {
         let seat = quantile(1.0 - cfg.level_quantile) - cfg.lone_drop;
-        if let Some(lone) = lone_back(map, &shape, hull.as_ref(), cfg, (radius, deepest)) {
+        if let Some((lone, under)) = lone_back(map, &shape, hull.as_ref(), cfg, (radius, deepest)) {
             open = Open {
-                floor_top: None,
+                floor_top: under.then_some(cfg.floor_top),
                 edges: None,
                 over: over(seat),
             };
@@ -429,34 +444,82 @@ fn candidate(
 /// at most `cfg.lone_level`, no cell higher than `cfg.wall_high` joined, and beside them
 /// (out to `radius` cells from them, along the segment) the cells on one side at least
 /// half seen, every seen one lower than `cfg.floor_top` (the floor behind a back, seen
-/// from behind it), and on the other at most a quarter seen. The rectangle runs along the
-/// segment from its line to `cfg.lone_depth` on that other side, and lies inside the
-/// map. `hull` is the cells' convex hull (`None` on a line); `radius` and `deepest` are
-/// `cfg.clear` and `cfg.max_half_width` in cells.
+/// from behind it), and on the other at most a quarter seen. Or, with the floor and
+/// nothing else seen on both sides (at least half seen on one), the back leaning
+/// towards the other: its cells at least `cfg.edge_low` high and more than
+/// `cfg.lone_edge` below its top (the walls' highest tenth) lie on average at least
+/// `cfg.lone_fall` nearer that side
+/// than its top edge (the walls within `cfg.lone_edge` of the top), and the top stands at
+/// least `cfg.lone_drop` over `cfg.edge_low`; then the segment may also be the top
+/// edge's own, where the cells are too thick for a line (a reclined back seen from
+/// above), and the floor in the rectangle counts as unseen (the second value). The
+/// rectangle runs along the segment from its line to `cfg.lone_depth` on that other
+/// side, and lies inside the map. `hull` is the cells' convex hull (`None` on a line);
+/// `radius` and `deepest` are `cfg.clear` and `cfg.max_half_width` in cells.
 fn lone_back(
     map: &HeightMap,
     comp: &[(usize, usize)],
     hull: Option<&Hull>,
     cfg: &HiddenConfig,
     (radius, deepest): (usize, usize),
-) -> Option<Hull> {
+) -> Option<(Hull, bool)> {
     let pts: Vec<(i64, i64)> = comp.iter().map(|&(x, y)| (x as i64, y as i64)).collect();
-    // The two farthest cells, the ends of the back: among the hull's vertices where
-    // there is a hull (few), among the cells on a line.
-    let (d2, (a, b)) = farthest_pair(hull.map_or(&pts, |h| &h.0));
-    let length = (d2 as f64).sqrt();
-    let (lo, hi) = cfg.lone_length;
-    if !(lo / map.cell - 1e-9..=hi / map.cell + 1e-9).contains(&length) || length < 1.0 {
+    // The back's top edge: its cells within `lone_edge` of its top (the walls' highest
+    // tenth). Seen from above, a back reclined over its seat shows its lower rows
+    // beside the top edge, on the seat's side.
+    // The back's top: the highest tenth of its walls (not of a seat's edges joined).
+    let walls_only: Vec<(usize, usize)> = comp
+        .iter()
+        .copied()
+        .filter(|&c| height(map, c).is_some_and(|h| h >= cfg.wall_low))
+        .collect();
+    let top = {
+        let h = sorted_heights(map, &walls_only);
+        h.get(to_usize(
+            ((1.0 - cfg.level_quantile) * (h.len().max(1) - 1) as f64).round(),
+        ))
+        .copied()?
+    };
+    // Its top edge, the walls within `lone_edge` of the top, and the cells below that
+    // (its lower rows, or a seat's edges joined): seen from above, a back reclined over
+    // its seat shows its lower rows beside its top edge, on the seat's side.
+    let rows = |keep: &dyn Fn(f64) -> bool| -> Vec<(i64, i64)> {
+        comp.iter()
+            .filter(|&&c| height(map, c).is_some_and(|h| h >= cfg.edge_low && keep(h)))
+            .map(|&(x, y)| (x as i64, y as i64))
+            .collect()
+    };
+    let edge = rows(&|h| h >= top - cfg.lone_edge);
+    let lower = rows(&|h| h < top - cfg.lone_edge);
+    if edge.is_empty() {
         return None;
     }
-    // Along the back (u) and across it (n), in cells.
-    let u = ((b.0 - a.0) as f64 / length, (b.1 - a.1) as f64 / length);
-    let n = (-u.1, u.0);
-    let at = |c: (i64, i64)| {
-        let (ex, ey) = ((c.0 - a.0) as f64, (c.1 - a.1) as f64);
-        (ex * u.0 + ey * u.1, ex * n.0 + ey * n.1)
-    };
     let thick = (deepest + 1) as f64;
+    // A back is a line: every cell within `deepest + 1` cells of the segment between the
+    // line's two farthest cells, `lone_length` long and at least twice as long as the
+    // line is thick (not a stool's seat or a post seen from above). The line is all the
+    // cells, or else the top edge alone: a reclined back, whose seat is then looked for
+    // only on the side it leans towards (below).
+    let fits = |l: &Line, cells: &[(i64, i64)]| {
+        let (lo, hi) = cfg.lone_length;
+        let (t0, t1) = l.across(&pts);
+        let (e0, e1) = l.across(cells);
+        (lo / map.cell - 1e-9..=hi / map.cell + 1e-9).contains(&l.length)
+            && l.length >= 1.0
+            && t1 - t0 <= 2.0 * thick + 1e-9
+            && 2.0 * (e1 - e0 + 1.0) <= l.length + 1e-9
+    };
+    let whole = Line::of(hull.map_or(&pts, |h| &h.0));
+    let (line, straight) = if fits(&whole, &pts) {
+        (whole, true)
+    } else {
+        let top_edge = Line::of(&edge);
+        if !fits(&top_edge, &edge) {
+            return None;
+        }
+        (top_edge, false)
+    };
+    let (a, b, length, n) = (line.a, line.b, line.length, line.n);
     // A back stands free: nothing higher than a wall joins it (the rest of a room's wall
     // whose top the image's edge cuts aslant, a counter's top).
     let higher = |c: &(usize, usize)| {
@@ -472,16 +535,7 @@ fn lone_back(
         return None;
     }
     // How far the walls reach from the line on either side.
-    let (mut t0, mut t1) = (0.0f64, 0.0f64);
-    for &c in &pts {
-        let t = at(c).1;
-        (t0, t1) = (t0.min(t), t1.max(t));
-    }
-    // A back is a line: at most `deepest + 1` cells either side of the segment, and at
-    // least twice as long as it is thick (not a stool's seat or a post seen from above).
-    if t1 - t0 > 2.0 * thick + 1e-9 || 2.0 * (t1 - t0 + 1.0) > length + 1e-9 {
-        return None;
-    }
+    let (t0, t1) = line.across(&pts);
     // The top's rise from one end to the other: the least-squares line of the walls'
     // heights over their places along the back.
     let walls: Vec<(f64, f64)> = comp
@@ -491,7 +545,7 @@ fn lone_back(
                 .filter(|&h| h >= cfg.wall_low)
                 .map(|h| (c, h))
         })
-        .map(|((x, y), h)| (at((x as i64, y as i64)).0, h))
+        .map(|((x, y), h)| (line.at((x as i64, y as i64)).0, h))
         .collect();
     let k = walls.len().max(1) as f64;
     let (ms, mh) = walls
@@ -511,7 +565,7 @@ fn lone_back(
     let (y0, y1) = (a.1.min(b.1) - span, a.1.max(b.1) + span);
     for y in y0.max(0)..=y1.min(map.ny as i64 - 1) {
         for x in x0.max(0)..=x1.min(map.nx as i64 - 1) {
-            let (s, t) = at((x, y));
+            let (s, t) = line.at((x, y));
             if !(0.0..=length).contains(&s)
                 || !(t0 - r..=t1 + r).contains(&t)
                 || (t0..=t1).contains(&t)
@@ -530,12 +584,29 @@ fn lone_back(
         }
     }
     // The camera's side: at least half seen, all of it the floor; the seat's: at most a
-    // quarter seen.
+    // quarter seen. Or the floor seen on both sides (under the seat too, between its
+    // legs), and the back reclined towards the seat's side: its cells' middle lies at
+    // least `lone_fall` from its top edge's, towards the seat.
     let seen_low = |(all, seen, low): (usize, usize, usize)| 2 * seen >= all && low == seen;
     let unseen = |(all, seen, _): (usize, usize, usize)| all > 0 && 4 * seen <= all;
-    let sign = match sides {
-        [front, back] if unseen(back) && seen_low(front) => 1.0,
-        [front, back] if unseen(front) && seen_low(back) => -1.0,
+    let floor = |(_, seen, low): (usize, usize, usize)| low == seen;
+    let middle = |cells: &[(i64, i64)]| {
+        cells.iter().map(|&c| line.at(c).1).sum::<f64>() / cells.len().max(1) as f64
+    };
+    let fall = middle(&lower) - middle(&edge);
+    let leans =
+        fall.abs() * map.cell >= cfg.lone_fall - 1e-9 && top - cfg.lone_drop >= cfg.edge_low;
+    let (sign, under) = match sides {
+        [front, back] if straight && unseen(back) && seen_low(front) => (1.0, false),
+        [front, back] if straight && unseen(front) && seen_low(back) => (-1.0, false),
+        [front, back] if leans && floor(front) && floor(back) => {
+            let sign = fall.signum();
+            let camera = if sign > 0.0 { front } else { back };
+            if !seen_low(camera) {
+                return None;
+            }
+            (sign, true)
+        }
         _ => return None,
     };
     let depth = sign * cfg.lone_depth / map.cell;
@@ -553,7 +624,52 @@ fn lone_back(
     if !(inside(fa) && inside(fb)) {
         return None;
     }
-    Hull::of_points(vec![a, b, fa, fb])
+    Hull::of_points(vec![a, b, fa, fb]).map(|h| (h, under))
+}
+
+/// The segment between the two farthest of some cells, as a frame: along it from `a`
+/// (`u`) and across it (`n`), in cells.
+#[derive(Debug, Clone, Copy)]
+struct Line {
+    a: (i64, i64),
+    b: (i64, i64),
+    length: f64,
+    u: (f64, f64),
+    n: (f64, f64),
+}
+
+impl Line {
+    /// The line of `pts` (not empty).
+    fn of(pts: &[(i64, i64)]) -> Line {
+        let (d2, (a, b)) = farthest_pair(pts);
+        let length = (d2 as f64).sqrt();
+        let u = if length > 0.0 {
+            ((b.0 - a.0) as f64 / length, (b.1 - a.1) as f64 / length)
+        } else {
+            (1.0, 0.0)
+        };
+        Line {
+            a,
+            b,
+            length,
+            u,
+            n: (-u.1, u.0),
+        }
+    }
+
+    /// Where cell `c` lies along the line from `a` and across it, cells.
+    fn at(&self, c: (i64, i64)) -> (f64, f64) {
+        let (ex, ey) = ((c.0 - self.a.0) as f64, (c.1 - self.a.1) as f64);
+        (ex * self.u.0 + ey * self.u.1, ex * self.n.0 + ey * self.n.1)
+    }
+
+    /// The least and the most of `cells` across the line, cells.
+    fn across(&self, cells: &[(i64, i64)]) -> (f64, f64) {
+        cells.iter().fold((0.0f64, 0.0f64), |(t0, t1), &c| {
+            let t = self.at(c).1;
+            (t0.min(t), t1.max(t))
+        })
+    }
 }
 
 /// The hidden places of one thin wall component, before the points seen in them are
@@ -1202,6 +1318,69 @@ mod tests {
         // At the map's edge, the seat's side past the border: nothing the scan covers.
         let edge = [(8, 21, 20, 22, 0.85)];
         assert!(hidden_seats(&painted(floor_to(19), &edge), &[], &cfg).is_empty());
+    }
+
+    #[test]
+    fn a_reclined_back_hides_its_seat_where_the_floor_shows_under_it() {
+        // A chair's back (0.45 m long) seen from behind, reclined over its seat: its top
+        // edge (0.90 m) along y = 12 and its lower rows (0.80-0.50 m) along y 13-16, on
+        // the seat's side; the floor seen on both sides, under the seat too (between its
+        // legs, the seat's top hidden by the back). Seen from above it is about as thick
+        // as it is long; its top edge is a line.
+        let back = [
+            (8, 16, 12, 12, 0.90),
+            (8, 16, 13, 13, 0.80),
+            (8, 16, 14, 14, 0.70),
+            (8, 16, 15, 15, 0.60),
+            (8, 16, 16, 16, 0.50),
+        ];
+        let floor = |_: usize, y: usize| (!(12..=16).contains(&y)).then_some(0.0);
+        let cfg = HiddenConfig::default();
+        let found = hidden_seats(&painted(floor, &back), &[], &cfg);
+        assert_eq!(found.len(), 1);
+        // On the side it leans towards, `lone_drop` below its top.
+        assert!((found[0].height - 0.50).abs() < 1e-9);
+        assert!(found[0].cells.iter().all(|&(_, y)| y > 12));
+        assert!(found[0].cells.contains(&(12, 20)));
+        // Mirrored: the lower rows along y 8-11, the top edge along y = 12.
+        let mirrored: Vec<_> = back
+            .iter()
+            .map(|&(x0, x1, y, _, h)| (x0, x1, 24 - y, 24 - y, h))
+            .collect();
+        let floor_m = |_: usize, y: usize| (!(8..=12).contains(&y)).then_some(0.0);
+        let found = hidden_seats(&painted(floor_m, &mirrored), &[], &cfg);
+        assert_eq!(found.len(), 1);
+        assert!(found[0].cells.iter().all(|&(_, y)| y < 12));
+        // Upright (every row at its top): which side the seat is on is not shown.
+        let upright: Vec<_> = back
+            .iter()
+            .map(|&(x0, x1, y0, y1, _)| (x0, x1, y0, y1, 0.90))
+            .collect();
+        assert!(hidden_seats(&painted(floor, &upright), &[], &cfg).is_empty());
+        // Something other than the floor beside it on the seat's side (a footrest's
+        // top, 0.20 m): not the floor seen under a seat.
+        let mut cabinet = back.to_vec();
+        cabinet.push((8, 9, 17, 18, 0.20));
+        assert!(hidden_seats(&painted(floor, &cabinet), &[], &cfg).is_empty());
+        // The floor seen on the seat's side only, the camera's side unseen: no side
+        // the scan saw the back from.
+        let far = painted(|_, y| (y > 16).then_some(0.0), &back);
+        assert!(hidden_seats(&far, &[], &cfg).is_empty());
+        // Leaning less than `lone_fall`: not shown either.
+        let steep = HiddenConfig {
+            lone_fall: 0.15,
+            ..cfg
+        };
+        assert!(hidden_seats(&painted(floor, &back), &[], &steep).is_empty());
+        // Too low for a back over a seat (its top 0.68 m: the seat would be 0.28 m high).
+        let low = [
+            (8, 16, 12, 12, 0.68),
+            (8, 16, 13, 13, 0.62),
+            (8, 16, 14, 14, 0.56),
+            (8, 16, 15, 15, 0.52),
+            (8, 16, 16, 16, 0.50),
+        ];
+        assert!(hidden_seats(&painted(floor, &low), &[], &cfg).is_empty());
     }
 
     #[test]
