@@ -409,10 +409,14 @@ fn candidate(
         }
     }
     // No such place, and the walls are one straight back alone, the floor seen beside
-    // it on one side only: the seat is on the other side, below the back.
+    // it on one side only (the seat is on the other side, below the back), or on both
+    // (the seat is on the side the back reclines towards).
     if centres.is_empty() && !arm {
-        let seat = quantile(1.0 - cfg.level_quantile) - cfg.lone_drop;
-        if let Some((lone, under)) = lone_back(map, &shape, hull.as_ref(), cfg, (radius, deepest)) {
+        let top = quantile(1.0 - cfg.level_quantile);
+        let seat = top - cfg.lone_drop;
+        if let Some((lone, under)) =
+            lone_back(map, &shape, hull.as_ref(), top, cfg, (radius, deepest))
+        {
             open = Open {
                 floor_top: under.then_some(cfg.floor_top),
                 edges: None,
@@ -454,32 +458,18 @@ fn candidate(
 /// edge's own, where the cells are too thick for a line (a reclined back seen from
 /// above), and the floor in the rectangle counts as unseen (the second value). The
 /// rectangle runs along the segment from its line to `cfg.lone_depth` on that other
-/// side, and lies inside the map. `hull` is the cells' convex hull (`None` on a line);
-/// `radius` and `deepest` are `cfg.clear` and `cfg.max_half_width` in cells.
+/// side, and lies inside the map. `hull` is the cells' convex hull (`None` on a line),
+/// `top` the walls' highest tenth (metres); `radius` and `deepest` are `cfg.clear` and
+/// `cfg.max_half_width` in cells.
 fn lone_back(
     map: &HeightMap,
     comp: &[(usize, usize)],
     hull: Option<&Hull>,
+    top: f64,
     cfg: &HiddenConfig,
     (radius, deepest): (usize, usize),
 ) -> Option<(Hull, bool)> {
     let pts: Vec<(i64, i64)> = comp.iter().map(|&(x, y)| (x as i64, y as i64)).collect();
-    // The back's top edge: its cells within `lone_edge` of its top (the walls' highest
-    // tenth). Seen from above, a back reclined over its seat shows its lower rows
-    // beside the top edge, on the seat's side.
-    // The back's top: the highest tenth of its walls (not of a seat's edges joined).
-    let walls_only: Vec<(usize, usize)> = comp
-        .iter()
-        .copied()
-        .filter(|&c| height(map, c).is_some_and(|h| h >= cfg.wall_low))
-        .collect();
-    let top = {
-        let h = sorted_heights(map, &walls_only);
-        h.get(to_usize(
-            ((1.0 - cfg.level_quantile) * (h.len().max(1) - 1) as f64).round(),
-        ))
-        .copied()?
-    };
     // Its top edge, the walls within `lone_edge` of the top, and the cells below that
     // (its lower rows, or a seat's edges joined): seen from above, a back reclined over
     // its seat shows its lower rows beside its top edge, on the seat's side.
@@ -585,8 +575,8 @@ fn lone_back(
     }
     // The camera's side: at least half seen, all of it the floor; the seat's: at most a
     // quarter seen. Or the floor seen on both sides (under the seat too, between its
-    // legs), and the back reclined towards the seat's side: its cells' middle lies at
-    // least `lone_fall` from its top edge's, towards the seat.
+    // legs), and the back reclined towards the seat's side: its lower rows' middle lies
+    // at least `lone_fall` from its top edge's, towards the seat.
     let seen_low = |(all, seen, low): (usize, usize, usize)| 2 * seen >= all && low == seen;
     let unseen = |(all, seen, _): (usize, usize, usize)| all > 0 && 4 * seen <= all;
     let floor = |(_, seen, low): (usize, usize, usize)| low == seen;
