@@ -122,6 +122,15 @@ pub struct HiddenConfig {
     /// A lone back's top is level: the line fitted to its heights along it (least
     /// squares) rises at most this many metres from one end to the other.
     pub lone_level: f64,
+    /// A lone back is at least this many times as long as it is thick (its line, seen
+    /// from above).
+    pub lone_aspect: f64,
+    /// Beside a lone back, the camera's side has at least this share of its cells seen
+    /// (all of them the floor) ...
+    pub lone_seen: f64,
+    /// ... and the seat's side at most this share, where the floor does not show under
+    /// the seat.
+    pub lone_unseen: f64,
     /// A lone back's top edge: its cells within this many metres of its top.
     pub lone_edge: f64,
     /// With the floor seen on both sides of a lone back, its seat lies on the side its
@@ -203,6 +212,15 @@ impl Default for HiddenConfig {
             // alike; a room's wall whose top the image's edge cuts aslant rises along it
             // through the walls' band (0.2-0.5 m over a sofa's length).
             lone_level: 0.10,
+            // 2: a back's line is long and thin (a chair's 0.35-0.50 m long, 0.03-0.15 m
+            // thick); a bar stool's seat or a post seen from above is as thick as long.
+            lone_aspect: 2.0,
+            // Half: the floor seen up to the back on the camera's side, bar the back's
+            // own shadow and the image's edge.
+            lone_seen: 0.5,
+            // A quarter: the seat's side hidden by the back, bar a few cells of the
+            // floor seen past its ends or through a gap.
+            lone_unseen: 0.25,
             // 0.10 m: a back's top edge, seen from above; a back reclined 5-15 degrees
             // shows its rows 0.05 m nearer the seat 0.2-0.6 m lower.
             lone_edge: 0.10,
@@ -497,7 +515,7 @@ fn lone_back(
         (lo / map.cell - 1e-9..=hi / map.cell + 1e-9).contains(&l.length)
             && l.length >= 1.0
             && t1 - t0 <= 2.0 * thick + 1e-9
-            && 2.0 * (e1 - e0 + 1.0) <= l.length + 1e-9
+            && cfg.lone_aspect * (e1 - e0 + 1.0) <= l.length + 1e-9
     };
     let whole = Line::of(hull.map_or(&pts, |h| &h.0));
     let (line, straight) = if fits(&whole, &pts) {
@@ -577,8 +595,12 @@ fn lone_back(
     // quarter seen. Or the floor seen on both sides (under the seat too, between its
     // legs), and the back reclined towards the seat's side: its lower rows' middle lies
     // at least `lone_fall` from its top edge's, towards the seat.
-    let seen_low = |(all, seen, low): (usize, usize, usize)| 2 * seen >= all && low == seen;
-    let unseen = |(all, seen, _): (usize, usize, usize)| all > 0 && 4 * seen <= all;
+    let seen_low = |(all, seen, low): (usize, usize, usize)| {
+        seen as f64 >= cfg.lone_seen * all as f64 && low == seen
+    };
+    let unseen = |(all, seen, _): (usize, usize, usize)| {
+        all > 0 && seen as f64 <= cfg.lone_unseen * all as f64
+    };
     let floor = |(_, seen, low): (usize, usize, usize)| low == seen;
     let middle = |cells: &[(i64, i64)]| {
         cells.iter().map(|&c| line.at(c).1).sum::<f64>() / cells.len().max(1) as f64
