@@ -106,7 +106,8 @@ pub struct HiddenConfig {
     pub back_rise: f64,
     /// A cell seen between these many metres above the hidden seat's height (inclusive),
     /// not one of the walls, may lie in a hidden place (not at its centre): a top over
-    /// the seat.
+    /// the seat. Beside a reclined lone back it may also lie on the seat's side, with
+    /// the floor ([`lone_back`]).
     pub under_room: (f64, f64),
     /// A straight wall alone (no arm, no seat's edge running forward from it), between
     /// these many metres long, standing free over the floor seen beside it on one side,
@@ -242,13 +243,13 @@ impl Default for HiddenConfig {
 /// unseen cells filled at the edges' median height if the walls' highest tenth rises
 /// `back_rise` above it (a seat seen in part beside its back). Walls that are one straight
 /// back alone hide their places on the side the scan did not see, or, with the floor seen
-/// on both sides, on the side the back leans towards ([`lone_back`]), filled `lone_drop`
-/// below the walls' highest tenth. `seen` is every point the
-/// scan saw, world frame: also the specks left out of the map, so that a sparse top seen
-/// at a grazing angle, whose scattered points are specks, is not taken for a space the
-/// scan never saw. Components are taken in the order of [`HeightMap::cells_at_least`]; a
-/// cell two of them would fill goes to the first, so the answer is deterministic. Run on
-/// the map with its holes filled.
+/// on both sides (on the seat's side also a top over it, `under_room`), on the side the
+/// back leans towards ([`lone_back`]), filled `lone_drop` below the walls' highest tenth.
+/// `seen` is every point the scan saw, world frame: also the specks left out of the map,
+/// so that a sparse top seen at a grazing angle, whose scattered points are specks, is
+/// not taken for a space the scan never saw. Components are taken in the order of
+/// [`HeightMap::cells_at_least`]; a cell two of them would fill goes to the first, so the
+/// answer is deterministic. Run on the map with its holes filled.
 pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -> Vec<Hole> {
     let is_wall = |h: f64| (cfg.wall_low..=cfg.wall_high).contains(&h);
     let radius = cells(map, cfg.clear);
@@ -468,7 +469,9 @@ fn candidate(
 /// half seen, every seen one lower than `cfg.floor_top` (the floor behind a back, seen
 /// from behind it), and on the other at most a quarter seen. Or, with the floor and
 /// nothing else seen on both sides (at least half seen on one), the back leaning
-/// towards the other: its cells at least `cfg.edge_low` high and more than
+/// towards the other, where a top over the seat may also be seen (between
+/// `cfg.under_room` over the seat `cfg.lone_drop` below the back's top: a desk the chair
+/// is pushed under): its cells at least `cfg.edge_low` high and more than
 /// `cfg.lone_edge` below its top (the walls' highest tenth) lie on average at least
 /// `cfg.lone_fall` nearer that side
 /// than its top edge (the walls within `cfg.lone_edge` of the top), and the top stands at
@@ -565,8 +568,13 @@ fn lone_back(
     if ss <= 0.0 || (sh / ss).abs() * length > cfg.lone_level + 1e-9 {
         return None;
     }
-    // Beside the walls along their length: per side, cells looked at, seen, seen low.
-    let mut sides = [(0usize, 0usize, 0usize); 2];
+    // A top over the seat (a desk the chair is pushed under): seen where a seat
+    // `lone_drop` below the back's top would leave room under it (`under_room`).
+    let over = (top - cfg.lone_drop + cfg.under_room.0 - 1e-9)
+        ..=(top - cfg.lone_drop + cfg.under_room.1 + 1e-9);
+    // Beside the walls along their length: per side, cells looked at, seen, seen low,
+    // seen as a top over the seat.
+    let mut sides = [(0usize, 0usize, 0usize, 0usize); 2];
     let r = radius as f64;
     let span = to_i64((t1.max(-t0) + r).ceil()) + 1;
     let (x0, x1) = (a.0.min(b.0) - span, a.0.max(b.0) + span);
@@ -588,20 +596,20 @@ fn lone_back(
             if let Some(h) = height(map, (cx, cy)) {
                 side.1 += 1;
                 side.2 += usize::from(h < cfg.floor_top);
+                side.3 += usize::from(over.contains(&h));
             }
         }
     }
     // The camera's side: at least half seen, all of it the floor; the seat's: at most a
     // quarter seen. Or the floor seen on both sides (under the seat too, between its
-    // legs), and the back reclined towards the seat's side: its lower rows' middle lies
-    // at least `lone_fall` from its top edge's, towards the seat.
-    let seen_low = |(all, seen, low): (usize, usize, usize)| {
-        seen as f64 >= cfg.lone_seen * all as f64 && low == seen
-    };
-    let unseen = |(all, seen, _): (usize, usize, usize)| {
-        all > 0 && seen as f64 <= cfg.lone_unseen * all as f64
-    };
-    let floor = |(_, seen, low): (usize, usize, usize)| low == seen;
+    // legs; on the seat's side also a top over the seat), and the back reclined towards
+    // the seat's side: its lower rows' middle lies at least `lone_fall` from its top
+    // edge's, towards the seat.
+    type Side = (usize, usize, usize, usize);
+    let seen_low =
+        |(all, seen, low, _): Side| seen as f64 >= cfg.lone_seen * all as f64 && low == seen;
+    let unseen = |(all, seen, _, _): Side| all > 0 && seen as f64 <= cfg.lone_unseen * all as f64;
+    let floor_or_over = |(_, seen, low, over): Side| low + over == seen;
     let middle = |cells: &[(i64, i64)]| {
         cells.iter().map(|&c| line.at(c).1).sum::<f64>() / cells.len().max(1) as f64
     };
@@ -611,7 +619,7 @@ fn lone_back(
     let (sign, under) = match sides {
         [front, back] if straight && unseen(back) && seen_low(front) => (1.0, false),
         [front, back] if straight && unseen(front) && seen_low(back) => (-1.0, false),
-        [front, back] if leans && floor(front) && floor(back) => {
+        [front, back] if leans && floor_or_over(front) && floor_or_over(back) => {
             let sign = fall.signum();
             let camera = if sign > 0.0 { front } else { back };
             if !seen_low(camera) {
@@ -1374,6 +1382,19 @@ mod tests {
         let mut cabinet = back.to_vec();
         cabinet.push((8, 9, 17, 18, 0.20));
         assert!(hidden_seats(&painted(floor, &cabinet), &[], &cfg).is_empty());
+        // A desk's top over the seat's side, 0.25 m over the seat, beside its corner
+        // (the chair pushed in under it): room for the thighs, the seat hidden under it
+        // as beside it.
+        let mut pushed_in = back.to_vec();
+        pushed_in.push((0, 10, 19, 26, 0.75));
+        let found = hidden_seats(&painted(floor, &pushed_in), &[], &cfg);
+        assert_eq!(found.len(), 1);
+        assert!((found[0].height - 0.50).abs() < 1e-9);
+        assert!(found[0].cells.iter().all(|&(_, y)| y > 12));
+        // The same top 0.10 m over the seat: no room for the thighs under it.
+        pushed_in.pop();
+        pushed_in.push((0, 10, 19, 26, 0.60));
+        assert!(hidden_seats(&painted(floor, &pushed_in), &[], &cfg).is_empty());
         // The floor seen on the seat's side only, the camera's side unseen: no side
         // the scan saw the back from.
         let far = painted(|_, y| (y > 16).then_some(0.0), &back);
