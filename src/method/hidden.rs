@@ -312,8 +312,15 @@ pub fn hidden_seats(map: &HeightMap, seen: &[Point3<f64>], cfg: &HiddenConfig) -
     {
         let mut cells = Vec::new();
         for c in centres {
+            // Over a cell where the map kept the seat (at the place's level), the point
+            // is a top over it (a desk's top over a chair pushed under it: the map keeps
+            // a lower layer only under a gap a thigh fits in), not the walls' surface.
+            let seat = |n: (usize, usize)| {
+                height(map, n).is_some_and(|h| (h - level).abs() <= cfg.surface_tolerance)
+            };
             let surface = |n: (usize, usize)| {
                 !open.is_over(map, n)
+                    && !seat(n)
                     && top
                         .get(&n)
                         .is_some_and(|&z| (z - middle).abs() <= cfg.surface_tolerance)
@@ -1663,6 +1670,36 @@ mod tests {
                 found
             );
         }
+    }
+
+    #[test]
+    fn a_top_over_a_seat_the_map_kept_is_no_surface_of_the_walls() {
+        // The armchair seen from behind, its seat seen across it in a band (y 12-13, at
+        // 0.47 m, the place's level) under a desk's top (points at 0.85 m, the walls'
+        // middle height, over the band): the chair pushed in under the desk, the map
+        // keeping the seat under it.
+        let mut walls = ARMCHAIR.to_vec();
+        walls.push((10, 19, 12, 13, 0.47));
+        let map = map_with(&walls);
+        let cfg = HiddenConfig::default();
+        let plain = hidden_seats(&map, &[], &cfg);
+        assert_eq!(plain.len(), 1);
+        let desk = |z: f64| -> Vec<Point3<f64>> {
+            (10..20)
+                .flat_map(|x| (12..14).map(move |y| (x, y)))
+                .map(|(x, y)| {
+                    Point3::new(0.05 * f64::from(x) + 0.025, 0.05 * f64::from(y) + 0.025, z)
+                })
+                .collect()
+        };
+        assert_eq!(hidden_seats(&map, &desk(0.85), &cfg), plain);
+        // The same points over the floor the map kept there (a desk's top over the floor,
+        // no seat under it): the walls' surface seen sparsely, as before.
+        let mut floor = ARMCHAIR.to_vec();
+        floor.push((10, 19, 12, 13, 0.0));
+        let map = map_with(&floor);
+        let plain = hidden_seats(&map, &[], &cfg);
+        assert_ne!(hidden_seats(&map, &desk(0.85), &cfg), plain);
     }
 
     #[test]
