@@ -442,9 +442,14 @@ fn candidate(
     if centres.is_empty() && !arm {
         let top = quantile(1.0 - cfg.level_quantile);
         let seat = top - cfg.lone_drop;
-        if let Some((lone, under)) =
-            lone_back(map, &shape, hull.as_ref(), top, cfg, (radius, deepest))
-        {
+        if let Some((lone, under)) = lone_back(
+            map,
+            &shape,
+            hull.as_ref(),
+            (top, over(seat)),
+            cfg,
+            (radius, deepest),
+        ) {
             open = Open {
                 floor_top: under.then_some(cfg.floor_top),
                 edges: None,
@@ -489,13 +494,14 @@ fn candidate(
 /// above), and the floor in the rectangle counts as unseen (the second value). The
 /// rectangle runs along the segment from its line to `cfg.lone_depth` on that other
 /// side, and lies inside the map. `hull` is the cells' convex hull (`None` on a line),
-/// `top` the walls' highest tenth (metres); `radius` and `deepest` are `cfg.clear` and
-/// `cfg.max_half_width` in cells.
+/// `top` the walls' highest tenth (metres) and `over` the heights of a top over the seat
+/// `lone_drop` below it (as the places allow, [`Open`]); `radius` and `deepest` are
+/// `cfg.clear` and `cfg.max_half_width` in cells.
 fn lone_back(
     map: &HeightMap,
     comp: &[(usize, usize)],
     hull: Option<&Hull>,
-    top: f64,
+    (top, over): (f64, Option<(f64, f64)>),
     cfg: &HiddenConfig,
     (radius, deepest): (usize, usize),
 ) -> Option<(Hull, bool)> {
@@ -577,10 +583,8 @@ fn lone_back(
     if ss <= 0.0 || (sh / ss).abs() * length > cfg.lone_level + 1e-9 {
         return None;
     }
-    // A top over the seat (a desk the chair is pushed under): seen where a seat
-    // `lone_drop` below the back's top would leave room under it (`under_room`).
-    let over = (top - cfg.lone_drop + cfg.under_room.0 - 1e-9)
-        ..=(top - cfg.lone_drop + cfg.under_room.1 + 1e-9);
+    // A top over the seat (a desk the chair is pushed under), as the places allow it.
+    let is_over = |h: f64| over.is_some_and(|(lo, hi)| (lo - 1e-9..=hi + 1e-9).contains(&h));
     // Beside the walls along their length: per side, cells looked at, seen, seen low,
     // seen as a top over the seat.
     let mut sides = [(0usize, 0usize, 0usize, 0usize); 2];
@@ -605,7 +609,7 @@ fn lone_back(
             if let Some(h) = height(map, (cx, cy)) {
                 side.1 += 1;
                 side.2 += usize::from(h < cfg.floor_top);
-                side.3 += usize::from(over.contains(&h));
+                side.3 += usize::from(is_over(h));
             }
         }
     }
